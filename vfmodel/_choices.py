@@ -1,0 +1,52 @@
+"""Every string-valued choice of the public API, as ``Literal`` aliases.
+
+The runtime list of allowed values is ``typing.get_args(Alias)``; validate with
+:func:`check_choice` so that error messages name the argument and the allowed set.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, get_args
+
+Kind = Literal["Z", "Y", "S", "H"]
+"""Representation of a frequency response: impedance, admittance, scattering, transfer."""
+
+ImmittanceKind = Literal["Z", "Y"]
+
+Weighting = Literal["uniform", "inv_abs", "inv_sqrt_abs"]
+"""Vector-fitting weights: 1, 1/|H|, 1/sqrt(|H|) (a user array is also accepted)."""
+
+PoleSpacing = Literal["log", "lin"]
+
+Topology = Literal["U-Frame", "V-Frame", "W-Frame", "U-V", "V-W", "W-U"]
+"""Impedance measurement topologies of CONTRACT section 2."""
+
+Effect = Literal[
+    "winding_skin_effect",
+    "insulation_dielectric_loss",
+    "frame_skin_effect",
+    "shaft_skin_effect",
+    "ball_skin_effect",
+    "lubricant_dielectric_loss",
+    "lubricant_two_layer",
+    "hertzian_edge_capacitance",
+    "metallic_contact",
+    "fixture_inductance",
+]
+"""Effect vocabulary of the discrepancy detective (CONTRACT section 7)."""
+
+KINDS: tuple[str, ...] = get_args(Kind)
+TOPOLOGIES: tuple[str, ...] = get_args(Topology)
+EFFECTS: tuple[str, ...] = get_args(Effect)
+
+
+def check_choice(name: str, value: Any, alias: Any) -> Any:
+    """Return ``value`` if it is one of ``get_args(alias)``, else raise ValueError naming ``name``."""
+    allowed = get_args(alias)
+    if value not in allowed:
+        from vfmodel.errors import InputError
+
+        raise InputError(
+            f"{name}: got {value!r}; expected one of {', '.join(repr(a) for a in allowed)}"
+        )
+    return value

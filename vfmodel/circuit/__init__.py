@@ -1,0 +1,1 @@
+"""Netlists, batched MNA, network poles, SPICE export/import, synthesis, ngspice runner."""

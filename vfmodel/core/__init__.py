@@ -1,0 +1,1 @@
+"""Core data types, errors and file formats."""

@@ -1,0 +1,1 @@
+"""Vector fitting, order selection, passivity test and enforcement."""
