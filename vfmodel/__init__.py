@@ -8,7 +8,7 @@ heavy dependencies (cvxpy, scikit-rf, matplotlib) load on first use.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 __version__ = "0.1.0"
 
@@ -51,13 +51,3 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return __all__
-
-
-if TYPE_CHECKING:  # pragma: no cover
-    from vfmodel.core.dataset import Dataset
-    from vfmodel.core.frequency_data import FrequencyData
-    from vfmodel.core.io_dataset import read_dataset
-    from vfmodel.core.io_recording import read_recording, write_recording
-    from vfmodel.core.io_spectrum import read_spectrum, write_spectrum
-    from vfmodel.core.rational_model import RationalModel, StateSpace
-    from vfmodel.core.recording import Recording

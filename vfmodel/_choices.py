@@ -41,7 +41,7 @@ EFFECTS: tuple[str, ...] = get_args(Effect)
 
 
 def check_choice(name: str, value: Any, alias: Any) -> Any:
-    """Return ``value`` if it is one of ``get_args(alias)``, else raise ValueError naming ``name``."""
+    """Return ``value`` if it is in ``get_args(alias)``; else InputError naming ``name``."""
     allowed = get_args(alias)
     if value not in allowed:
         from vfmodel.errors import InputError

@@ -29,7 +29,8 @@ def _inv(a: Array, what: str) -> Array:
             f"cannot convert: {what} is singular at frequency index {bad}",
             expected="a non-singular matrix at every frequency",
         )
-    return np.linalg.inv(a)
+    out: Array = np.linalg.inv(a).astype(complex)
+    return out
 
 
 def z2y(z: Array) -> Array:

@@ -1,1 +1,1 @@
-"""pipeline layer."""
+"""Pipelines composing the layers: summary, reproduce, diagnose, predict."""

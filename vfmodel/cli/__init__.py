@@ -1,0 +1,1 @@
+"""The ``vfmodel`` command line (thin: parse, call, print, exit codes)."""

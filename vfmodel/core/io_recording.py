@@ -1,0 +1,171 @@
+"""Recording files: NPZ (arrays u_U, u_V, u_W, u_B and t or fs) and CSV
+(header ``time_s,u_U,u_V,u_W,u_B``), CONTRACT section 2."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel.core._text import read_text_file
+from vfmodel.core.atomic import atomic_path, atomic_write_text
+from vfmodel.core.recording import BEARING, TERMINALS, Recording
+from vfmodel.errors import InputError
+
+CHANNELS = (*TERMINALS, BEARING)
+CSV_HEADER = ("time_s", *CHANNELS)
+
+
+def _fs_from_time(t: NDArray[np.float64], src: str) -> tuple[float, float]:
+    if t.ndim != 1 or t.size < 2:
+        raise InputError("time axis too short", source=src, found=f"{t.size} samples")
+    if not np.all(np.isfinite(t)):
+        k = int(np.argmin(np.isfinite(t)))
+        raise InputError("time is NaN or infinite", source=src, place=f"sample {k}")
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if step <= 0:
+        raise InputError("time axis is not increasing", source=src)
+    # allow float rounding of the stored time values, nothing more
+    tol = 1e-6 * step + 8 * np.finfo(float).eps * float(np.max(np.abs(t)))
+    bad = np.abs(dt - step) > tol
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise InputError(
+            "time axis is not uniformly spaced",
+            source=src,
+            place=f"between samples {k} and {k + 1}",
+            found=f"step {dt[k]:.6g} s",
+            expected=f"{step:.6g} s like the others",
+        )
+    fs = (t.size - 1) / float(t[-1] - t[0])
+    return fs, float(t[0])
+
+
+def _check_lengths(arrays: dict[str, NDArray[np.float64]], src: str) -> None:
+    lengths = {k: v.size for k, v in arrays.items()}
+    if len(set(lengths.values())) > 1:
+        ref = max(set(lengths.values()), key=list(lengths.values()).count)
+        odd = [k for k, n in lengths.items() if n != ref]
+        raise InputError(
+            "channels of unequal length",
+            source=src,
+            place=f"channel {odd[0]}",
+            found=f"{lengths[odd[0]]} samples",
+            expected=f"{ref} like the others",
+        )
+
+
+def read_recording(path: str | Path, speed_rpm: float | None = None) -> Recording:
+    """Read a recording (NPZ or CSV by suffix)."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix == ".npz":
+        return _read_npz(p, speed_rpm)
+    if suffix == ".csv":
+        return _read_csv(p, speed_rpm)
+    raise InputError(
+        "unknown recording file type", source=str(p), found=repr(p.suffix),
+        expected="'.npz' or '.csv'",
+    )
+
+
+def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
+    src = str(p)
+    if not p.is_file():
+        raise InputError("recording file not found", source=src)
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            arrays = {k: np.asarray(z[k]) for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InputError(f"not a readable NPZ file ({err})", source=src) from None
+    missing = [c for c in CHANNELS if c not in arrays]
+    if missing:
+        raise InputError(
+            f"missing array {missing[0]}",
+            source=src,
+            found=", ".join(sorted(arrays)) or "no arrays",
+            expected="u_U, u_V, u_W, u_B and t or fs",
+        )
+    chans: dict[str, NDArray[np.float64]] = {}
+    for c in CHANNELS:
+        a = arrays[c]
+        if a.ndim != 1 or not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+            raise InputError(
+                "channel must be a 1-D real array", source=src, place=f"array {c}",
+                found=f"shape {a.shape}, dtype {a.dtype}",
+            )
+        chans[c] = a.astype(float)
+    _check_lengths(chans, src)
+    if "t" in arrays:
+        t = np.asarray(arrays["t"], dtype=float)
+        if t.size != chans[CHANNELS[0]].size:
+            raise InputError(
+                "time axis and channels of unequal length", source=src, place="array t",
+                found=f"{t.size} samples", expected=f"{chans[CHANNELS[0]].size}",
+            )
+        fs, t0 = _fs_from_time(t, src)
+    elif "fs" in arrays:
+        fsa = np.asarray(arrays["fs"])
+        if fsa.size != 1 or not np.issubdtype(fsa.dtype, np.number):
+            raise InputError("fs must be a scalar", source=src, found=f"shape {fsa.shape}")
+        fs, t0 = float(fsa.ravel()[0]), 0.0
+    else:
+        raise InputError("no time axis", source=src, expected="an array t or a scalar fs")
+    return Recording(fs, np.stack([chans[c] for c in CHANNELS]), CHANNELS, speed_rpm, t0, src)
+
+
+def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
+    src = str(p)
+    text = read_text_file(p, "recording CSV")
+    first, _, rest = text.partition("\n")
+    header = tuple(c.strip() for c in first.strip().split(","))
+    if header != CSV_HEADER:
+        raise InputError(
+            "unknown recording CSV header", source=src, place="line 1",
+            found=first.strip()[:80], expected=",".join(CSV_HEADER),
+        )
+    try:
+        table = np.loadtxt(io.StringIO(rest), delimiter=",", ndmin=2)
+    except ValueError as err:
+        raise InputError(f"unreadable data: {err}", source=src) from None
+    if table.size == 0:
+        raise InputError("recording CSV has no data rows", source=src)
+    if table.shape[1] != len(CSV_HEADER):
+        raise InputError(
+            "wrong number of columns", source=src, found=str(table.shape[1]),
+            expected=str(len(CSV_HEADER)),
+        )
+    for c, name in enumerate(CSV_HEADER):
+        bad = ~np.isfinite(table[:, c])
+        if bad.any():
+            raise InputError(
+                "NaN or infinite sample", source=src,
+                place=f"line {int(np.argmax(bad)) + 2}, column {name}", expected="finite numbers",
+            )
+    fs, t0 = _fs_from_time(table[:, 0], src)
+    return Recording(fs, table[:, 1:].T, CHANNELS, speed_rpm, t0, src)
+
+
+def write_recording(path: str | Path, rec: Recording) -> None:
+    """Write a recording as NPZ (``fs`` scalar) or CSV, by suffix, atomically."""
+    p = Path(path)
+    if p.suffix.lower() == ".npz":
+        arrays = {c: rec.channel(c) for c in rec.channels}
+        with atomic_path(p) as tmp, open(tmp, "wb") as fh:
+            np.savez_compressed(fh, fs=np.float64(rec.fs), **arrays)  # type: ignore[arg-type]
+        return
+    if p.suffix.lower() == ".csv":
+        missing = [c for c in CHANNELS if c not in rec.channels]
+        if missing:
+            raise InputError("recording lacks channels for CSV", found=str(missing))
+        buf = io.StringIO()
+        table = np.column_stack([rec.t, *(rec.channel(c) for c in CHANNELS)])
+        np.savetxt(buf, table, delimiter=",", header=",".join(CSV_HEADER), comments="",
+                   fmt="%.12g")
+        atomic_write_text(p, buf.getvalue())
+        return
+    raise InputError("unknown recording file type", source=str(p), expected="'.npz' or '.csv'")

@@ -1,0 +1,101 @@
+"""Summary of a dataset for ``vfmodel info`` (numbers only; the CLI formats them)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import signal
+
+from vfmodel.core.dataset import Dataset
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.recording import Recording
+
+
+def spectrum_noise_pct(data: FrequencyData) -> float:
+    """Relative complex noise of a densely sampled spectrum, percent.
+
+    Second differences remove smooth variation; for independent complex noise of relative
+    standard deviation s, ``|d2|^2/|Z|^2`` is exponential with mean ``6 s^2``, so the median
+    gives ``s = sqrt(median / (6 ln 2))``. The median keeps resonances from biasing it.
+    Returns NaN for fewer than 5 points.
+    """
+    z = data.values[:, 0, 0]
+    if z.size < 5:
+        return float("nan")
+    d2 = (z[:-2] - 2 * z[1:-1] + z[2:]) / np.abs(z[1:-1])
+    return float(100 * np.sqrt(np.median(np.abs(d2) ** 2) / (6 * np.log(2))))
+
+
+def floor_snr_db(x: NDArray[np.float64], fs: float) -> float:
+    """SNR of a channel from its PSD floor in the top fifth of the band (white noise).
+
+    The noise power is the floor level times the bandwidth; the signal power is the rest.
+    """
+    nper = int(min(4096, x.size))
+    f, p = signal.welch(x - np.mean(x), fs=fs, nperseg=nper)
+    top = f >= 0.8 * f[-1]
+    noise = float(np.median(p[top])) * fs / 2
+    total = float(np.trapezoid(p, f))
+    if noise <= 0 or total <= noise:
+        return float("-inf") if noise > 0 else float("inf")
+    return float(10 * np.log10((total - noise) / noise))
+
+
+def coherence_snr_db(rec: Recording, f_max_hz: float = 10e6) -> float:
+    """SNR of the bearing voltage from the multiple coherence with the terminal voltages.
+
+    With gamma^2 the multiple coherence, the part of the output PSD explained by the inputs
+    is gamma^2 G_yy and the rest (1 - gamma^2) G_yy is noise; both are integrated up to
+    ``f_max_hz``.
+    """
+    from vfmodel.signals.h1 import h1_estimate
+
+    n = rec.n_samples
+    nper = int(2 ** np.floor(np.log2(max(64, n // 16))))
+    f, _, coh = h1_estimate(rec.terminals, rec.bearing, rec.fs, nperseg=nper)
+    _, gyy = signal.welch(rec.bearing - np.mean(rec.bearing), fs=rec.fs, nperseg=nper)
+    band = (f > 0) & (f <= f_max_hz)
+    c = np.clip(coh[band], 0.0, 1.0)
+    sig = float(np.sum(c * gyy[band]))
+    noi = float(np.sum((1 - c) * gyy[band]))
+    return float(10 * np.log10(sig / noi)) if noi > 0 else float("inf")
+
+
+def dataset_summary(ds: Dataset) -> dict[str, Any]:
+    """Plain-dict summary: spectra ranges and noise, recordings' rates, durations, SNR."""
+    imp = {}
+    for topo, d in ds.impedance.items():
+        mag = np.abs(d.values[:, 0, 0])
+        imp[topo] = {
+            "n_points": d.n_freq,
+            "f_min_hz": float(d.freq_hz[0]),
+            "f_max_hz": float(d.freq_hz[-1]),
+            "z_min_ohm": float(mag.min()),
+            "z_max_ohm": float(mag.max()),
+            "noise_pct": spectrum_noise_pct(d),
+        }
+    recs = []
+    for r in ds.recordings:
+        terms = [floor_snr_db(r.channel(c), r.fs) for c in ("u_U", "u_V", "u_W")]
+        recs.append(
+            {
+                "speed_rpm": float(r.speed_rpm or 0.0),
+                "file": r.source,
+                "fs_hz": r.fs,
+                "n_samples": r.n_samples,
+                "duration_s": r.duration_s,
+                "peak_u_B_v": float(np.max(np.abs(r.bearing))),
+                "snr_u_B_db": coherence_snr_db(r),
+                "snr_terminals_db": float(np.mean(terms)),
+            }
+        )
+    return {
+        "name": ds.name,
+        "root": str(ds.root),
+        "description": ds.description,
+        "temperature_c": ds.temperature_c,
+        "impedance": imp,
+        "recordings": recs,
+    }
