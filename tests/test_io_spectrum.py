@@ -60,7 +60,8 @@ def test_mag_phase_csv(tmp_path: Path) -> None:
     f = np.array([1e3, 1e4, 1e5])
     z = rlc_impedance(f)
     rows = "\n".join(
-        f"{fi:.17g},{abs(zi):.17g},{np.degrees(np.angle(zi)):.17g}" for fi, zi in zip(f, z, strict=True)
+        f"{fi:.17g},{abs(zi):.17g},{np.degrees(np.angle(zi)):.17g}"
+        for fi, zi in zip(f, z, strict=True)
     )
     (tmp_path / "m.csv").write_text("frequency_hz,z_mag_ohm,z_phase_deg\n" + rows + "\n")
     got = read_spectrum(tmp_path / "m.csv").values[:, 0, 0]
