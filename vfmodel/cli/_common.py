@@ -10,6 +10,7 @@ from typing import Any
 import click
 
 from vfmodel.core.atomic import atomic_write_text
+from vfmodel.core.progress import no_progress
 
 quiet_option = click.option(
     "--quiet", "-q", is_flag=True, help="No progress output on stderr."
@@ -31,3 +32,35 @@ def show_progress(quiet: bool) -> bool:
 def write_json(path: Path, obj: Any) -> None:
     """Write ``obj`` as indented JSON, atomically."""
     atomic_write_text(path, json.dumps(obj, indent=2, allow_nan=False) + "\n")
+
+
+class _Bars:
+    """A tqdm bar per stage on stderr (the stage name is the bar's description)."""
+
+    def __init__(self) -> None:
+        self._bars: dict[str, Any] = {}
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        from tqdm import tqdm
+
+        bar = self._bars.get(stage)
+        if bar is None:
+            for other in self._bars.values():
+                other.close()
+            bar = tqdm(total=total, desc=stage, file=sys.stderr, leave=True,
+                       dynamic_ncols=True)
+            self._bars[stage] = bar
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+        if done >= total:
+            bar.close()
+
+    def close(self) -> None:
+        for bar in self._bars.values():
+            bar.close()
+
+
+def progress_bar(quiet: bool) -> Any:
+    """The progress callback for a command: bars on a terminal, silent otherwise."""
+    return _Bars() if show_progress(quiet) else no_progress
