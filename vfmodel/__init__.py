@@ -32,7 +32,11 @@ _EXPORTS: dict[str, str] = {
     "PassivityReport": "vfmodel.fitting.passivity",
     # signals
     "h1_estimate": "vfmodel.signals.h1",
+    "h1_analysis": "vfmodel.signals.h1",
+    "bvr": "vfmodel.signals.h1",
+    "brickwall_filter": "vfmodel.signals.filters",
     "simulate": "vfmodel.signals.simulate",
+    "simulate_periodic": "vfmodel.signals.simulate",
     # circuit
     "Circuit": "vfmodel.circuit.netlist",
 }

@@ -184,7 +184,7 @@ class RationalModel:
         s = np.atleast_1d(np.asarray(s, dtype=complex))
         # (n_s, n_poles) @ (n_poles, n_out*n_in)
         basis = 1.0 / (s[:, None] - self.poles[None, :])
-        h = (basis @ self.residues.reshape(self.n_poles, -1)).reshape(
+        h = (basis @ self.residues.reshape(self.n_poles, self.n_out * self.n_in)).reshape(
             s.size, self.n_out, self.n_in
         )
         return h + self.dd[None] + s[:, None, None] * self.ee[None]
