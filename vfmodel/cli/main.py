@@ -51,8 +51,21 @@ def _register_optional() -> None:
 _register_optional()
 
 
+def _show_warning(message: Warning | str, category: type[Warning], filename: str,
+                  lineno: int, file: object = None, line: str | None = None) -> None:
+    click.echo(f"vfmodel: warning: {message}", err=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI and return its exit status (used by the console script)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
     try:
         cli.main(args=argv, prog_name="vfmodel", standalone_mode=False)
     except click.exceptions.Exit as ex:

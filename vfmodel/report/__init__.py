@@ -1,1 +1,1 @@
-"""report layer."""
+"""Figures (matplotlib, imported lazily, Agg backend) and HTML reports."""

@@ -1,0 +1,437 @@
+"""Public vector fitting: :func:`vector_fit` and its :class:`FitReport`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel._choices import Kind, PoleSpacing, Weighting, check_choice
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.rational_model import RationalModel
+from vfmodel.errors import FitError, FitWarning, InputError
+from vfmodel.fitting import _order, _vf_core
+
+if TYPE_CHECKING:  # pragma: no cover
+    import skrf
+
+__all__ = ["FitReport", "FitStep", "vector_fit"]
+
+_SRC = "vector_fit"
+
+
+@dataclass(frozen=True)
+class FitStep:
+    """One pole-relocation iteration of the fit.
+
+    ``order`` counts every pole (each complex pole of a conjugate pair separately);
+    ``weighted_rel_rms_error`` = ||W (H_model - H)||_F / ||W H||_F at that iteration;
+    ``sigma_deviation`` = max |sigma - 1| (0 when the poles no longer move).
+    """
+
+    order: int
+    weighted_rel_rms_error: float
+    sigma_deviation: float
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """What :func:`vector_fit` did and how well the model matches the data.
+
+    Attributes
+    ----------
+    order : int
+        Number of poles, each complex pole of a conjugate pair counted separately
+        (the length of ``model.poles``).
+    n_iterations : int
+        Pole-relocation iterations run in total (all orders tried).
+    rms_error : float
+        sqrt(mean |H_model - H_data|^2) over all frequencies and entries (unweighted).
+    rel_rms_error : float
+        ||H_model - H_data||_F / ||H_data||_F over all frequencies and entries
+        (CONTRACT section 4).
+    weighted_rel_rms_error : float
+        The same with the fitting weights: ||W (H_model - H)||_F / ||W H||_F.
+    max_abs_error : float
+        max |H_model - H_data|.
+    converged : bool
+        The last pole relocation met the convergence test.
+    order_reason : str
+        Why this order (given, or how the automatic selection stopped).
+    noise_floor : float or None
+        Estimated noise level of the data in the units of ``weighted_rel_rms_error``
+        (RMS of the noise of W H divided by the RMS of W H); None when not estimated.
+    history : tuple of FitStep
+        Every pole-relocation iteration in order.
+    weighting : str
+        The weighting used ("user" for an array).
+    kind : str
+        Representation fitted (Z, Y, S or H).
+    """
+
+    order: int
+    n_iterations: int
+    rms_error: float
+    rel_rms_error: float
+    weighted_rel_rms_error: float
+    max_abs_error: float
+    converged: bool
+    order_reason: str
+    noise_floor: float | None
+    history: tuple[FitStep, ...]
+    weighting: str
+    kind: str
+
+
+# ---------------------------------------------------------------------- input handling
+def _as_frequency_data(data: Any, kind: Kind | None) -> FrequencyData:
+    if isinstance(data, FrequencyData):
+        fd = data
+    else:
+        try:
+            import skrf
+        except ImportError:  # pragma: no cover
+            skrf = None
+        if skrf is not None and isinstance(data, skrf.Network):
+            fd = FrequencyData.from_network(data, kind=kind or "S")
+        else:
+            raise InputError(
+                "data must be a FrequencyData or a skrf.Network",
+                source=_SRC,
+                found=type(data).__name__,
+            )
+    if kind is not None:
+        check_choice("kind", kind, Kind)
+        fd = fd.to_kind(kind)
+    return fd
+
+
+def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], str]:
+    """Weights (K, Mw) and the name of the weighting."""
+    h = fd.values.reshape(fd.n_freq, -1)
+    if isinstance(weighting, str):
+        check_choice("weighting", weighting, Weighting)
+        if weighting == "uniform":
+            return np.ones((fd.n_freq, 1)), weighting
+        mag = np.abs(h)
+        floor = 1e-12 * max(float(np.max(mag)), 1e-300)
+        mag = np.maximum(mag, floor)
+        w = 1.0 / mag if weighting == "inv_abs" else 1.0 / np.sqrt(mag)
+        return w, weighting
+    w = np.asarray(weighting, dtype=float)
+    if w.shape == (fd.n_freq,):
+        w = w[:, None]
+    elif w.shape == fd.values.shape:
+        w = w.reshape(fd.n_freq, -1)
+    else:
+        raise InputError(
+            "weighting array has the wrong shape",
+            source=_SRC,
+            place="weighting",
+            found=str(w.shape),
+            expected=f"{(fd.n_freq,)} or {fd.values.shape}",
+        )
+    if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
+        raise InputError(
+            "weights must be finite, non-negative and not all zero",
+            source=_SRC,
+            place="weighting",
+        )
+    return w, "user"
+
+
+def _check_data(fd: FrequencyData) -> None:
+    """Reject data no rational fit can represent meaningfully."""
+    src = fd.source or _SRC
+    if fd.n_freq < 3:
+        raise InputError(
+            "too few frequency points for a rational fit",
+            source=src,
+            found=f"{fd.n_freq} point(s)",
+            expected="at least 3 frequency points",
+        )
+    if fd.freq_hz[-1] <= 0:
+        raise InputError("no positive frequency", source=src)
+    h = fd.values.reshape(fd.n_freq, -1)
+    scale = float(np.max(np.abs(h)))
+    if scale == 0.0:
+        raise InputError(
+            "the data is zero at every frequency; there is nothing to fit",
+            source=src,
+            expected="a response that is not identically zero",
+        )
+    spread = float(np.max(np.abs(h - h.mean(axis=0, keepdims=True))))
+    if spread <= 1e-12 * scale:
+        raise InputError(
+            "the data does not change with frequency; a rational fit would only "
+            "produce arbitrary poles (use a constant D instead)",
+            source=src,
+            found=f"constant response (spread {spread:.3g} of {scale:.3g})",
+            expected="a frequency-dependent response",
+        )
+
+
+def _max_order(n_freq: int, has_dc: bool, n_extra: int) -> int:
+    # real equations per response: 2 per sample, 1 at 0 Hz; unknowns: N + n_extra (+1 for
+    # the sigma constant). Keep at least one more equation than unknowns.
+    n_eq = 2 * n_freq - int(has_dc)
+    return max(n_eq - n_extra - 2, 0)
+
+
+# ---------------------------------------------------------------------- main entry
+def vector_fit(
+    data: FrequencyData | skrf.Network,
+    order: int | Literal["auto"] = "auto",
+    *,
+    kind: Kind | None = None,
+    weighting: Weighting | NDArray[np.float64] = "uniform",
+    spacing: PoleSpacing = "log",
+    fit_d: bool = True,
+    fit_e: bool = False,
+    initial_poles: NDArray[np.complex128] | None = None,
+    max_iterations: int = 30,
+    tol: float = 1e-4,
+    max_order: int | None = None,
+    enforce_stability: bool = True,
+) -> tuple[RationalModel, FitReport]:
+    """Fit a rational model with common poles to every entry of a frequency response.
+
+    Fast relaxed vector fitting: frequencies are scaled to the band edge, starting poles
+    are complex pairs log- or linearly spaced over the band, each iteration relocates the
+    poles with the relaxed sigma system reduced by QR per response (Deschrijver et al.
+    2008) and identifies the residues of all responses in one batched least-squares solve.
+    Unstable poles are flipped into the left half plane. With 0 Hz in the data and
+    ``fit_d`` the model matches Re H(0) exactly.
+
+    Parameters
+    ----------
+    data : FrequencyData or skrf.Network
+        Samples of a Z, Y, S or H response of any port count.
+    order : int or "auto"
+        Number of poles (each complex pole of a pair counted separately; an odd order has
+        one real pole), or "auto": poles are added where the error is largest and spurious
+        ones dropped until the residual reaches the estimated noise floor or stops
+        improving (see :class:`FitReport` ``order_reason``).
+    kind : {"Z", "Y", "S", "H"}, optional
+        Representation to fit (data is converted); default: the data's own kind, "S" for a
+        skrf.Network.
+    weighting : {"uniform", "inv_abs", "inv_sqrt_abs"} or array
+        Least-squares weights 1, 1/|H|, 1/sqrt|H| per entry, or a user array of shape
+        (n_freq,) or (n_freq, n_out, n_in).
+    spacing : {"log", "lin"}
+        Spacing of the starting poles.
+    fit_d, fit_e : bool
+        Fit the constant term D and the proportional term E.
+    initial_poles : array, optional
+        Starting poles in rad/s (conjugate pairs listed explicitly); overrides ``order``'s
+        starting poles for a fixed order.
+    max_iterations : int
+        Pole relocations per order.
+    tol : float
+        Convergence tolerance on max |sigma - 1| and on the relative change of the error.
+    max_order : int, optional
+        Upper limit of the automatic order (default: what the data supports, at most 200).
+    enforce_stability : bool
+        Flip unstable poles (default True).
+
+    Returns
+    -------
+    model : RationalModel
+        Stable (with ``enforce_stability``) pole-residue model of kind ``kind``.
+    report : FitReport
+
+    Raises
+    ------
+    InputError
+        Bad arguments, or data a rational fit cannot represent (fewer than 3 points,
+        identically zero or constant data, more poles than the data supports).
+    FitError
+        The fit produced a non-finite model.
+
+    References
+    ----------
+    B. Gustavsen, A. Semlyen, IEEE Trans. Power Delivery 14(3), 1999.
+    doi:10.1109/61.772353
+    B. Gustavsen, IEEE Trans. Power Delivery 21(3), 2006. doi:10.1109/TPWRD.2005.860281
+    D. Deschrijver et al., IEEE MWCL 18(6), 2008. doi:10.1109/LMWC.2008.922585
+    """
+    fd = _as_frequency_data(data, kind)
+    _check_data(fd)
+    check_choice("spacing", spacing, PoleSpacing)
+    if not isinstance(max_iterations, int | np.integer) or max_iterations < 1:
+        raise InputError("max_iterations must be a positive integer", found=repr(max_iterations))
+    if not (np.isfinite(tol) and tol > 0):
+        raise InputError("tol must be positive", found=repr(tol))
+    w, wname = _weights(fd, weighting)
+    has_dc = bool(fd.freq_hz[0] == 0.0)
+    n_extra = int(bool(fit_d)) + int(bool(fit_e))
+    limit = _max_order(fd.n_freq, has_dc, n_extra)
+    omega = fd.omega
+    omega_scale = float(omega[-1])
+    h = fd.values.reshape(fd.n_freq, -1).copy()
+    if has_dc:
+        h[0] = h[0].real  # a real model is real at s = 0
+    prob = _vf_core.Problem(
+        s=np.asarray(1j * omega / omega_scale, dtype=complex),
+        h=h,
+        w=w,
+        fit_d=bool(fit_d),
+        fit_e=bool(fit_e),
+        dc_index=0 if has_dc else None,
+    )
+    positive = omega[omega > 0] / omega_scale
+    w_lo, w_hi = float(positive[0]), 1.0
+    if order == "auto":
+        if initial_poles is not None:
+            raise InputError("initial_poles cannot be combined with order='auto'")
+        cap = min(limit, 200) if max_order is None else min(int(max_order), limit)
+        if cap < 2:
+            raise InputError(
+                "too few frequency points for an automatic fit",
+                source=fd.source or _SRC,
+                found=f"{fd.n_freq} points",
+                expected="enough points for at least 2 poles",
+            )
+        auto = _order.auto_order(
+            prob,
+            w_lo=w_lo,
+            w_hi=w_hi,
+            spacing=spacing,
+            max_order=cap,
+            max_iterations=max_iterations,
+            tol=tol,
+            stable=enforce_stability,
+        )
+        coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
+        reason, noise = auto.reason, auto.noise_floor
+    else:
+        if isinstance(order, bool) or not isinstance(order, int | np.integer):
+            raise InputError("order must be a positive integer or 'auto'", found=repr(order))
+        n = int(order)
+        if initial_poles is not None:
+            reps = _reps_from_user(initial_poles, omega_scale)
+            n = _vf_core.n_poles(reps)
+        else:
+            reps = None
+        if n < 1:
+            raise InputError("order must be at least 1", found=str(n))
+        if n > limit:
+            raise InputError(
+                f"order {n} needs more frequency points than the data has",
+                source=fd.source or _SRC,
+                found=f"{fd.n_freq} points ({2 * fd.n_freq - int(has_dc)} real equations)",
+                expected=f"order <= {limit} for these data",
+            )
+        if reps is None:
+            reps = _vf_core.starting_poles(n, w_lo, w_hi, spacing)
+        res = _vf_core.iterate(
+            prob, reps, max_iterations=max_iterations, tol=tol, stable=enforce_stability
+        )
+        coef, history, n_it, converged = res.coef, res.history, res.n_iterations, res.converged
+        reason, noise = f"order {n} given", None
+    model = _to_model(coef, fd, omega_scale, fit_d=bool(fit_d), fit_e=bool(fit_e))
+    report = _make_report(
+        model, fd, prob, coef, n_it, converged, reason, noise, history, wname
+    )
+    if not converged:
+        import warnings
+
+        warnings.warn(
+            f"vector fitting did not converge in {max_iterations} iterations per order "
+            f"(relative RMS error {report.rel_rms_error:.3g}); raise max_iterations or "
+            "change the order",
+            FitWarning,
+            stacklevel=2,
+        )
+    return model, report
+
+
+def _reps_from_user(poles: Any, omega_scale: float) -> NDArray[np.complex128]:
+    p = np.atleast_1d(np.asarray(poles, dtype=complex))
+    if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)):
+        raise InputError("initial_poles must be a non-empty 1-D array of finite poles")
+    # reuse the model's pairing check (raises InputError for unpaired poles)
+    m = RationalModel(poles=p, residues=np.zeros((p.size, 1, 1), complex), kind="H")
+    reps = m.poles[(m.poles.imag >= 0)] / omega_scale
+    return _vf_core.sort_reps(reps)
+
+
+def _to_model(
+    coef: _vf_core.Coefficients,
+    fd: FrequencyData,
+    omega_scale: float,
+    *,
+    fit_d: bool,
+    fit_e: bool,
+) -> RationalModel:
+    reps = coef.reps
+    nr = int(np.sum(reps.imag == 0))
+    m = coef.c.shape[0]
+    poles: list[complex] = []
+    res: list[NDArray[np.complex128]] = []
+    for j in range(nr):
+        poles.append(complex(reps[j].real))
+        res.append(coef.c[:, j].astype(complex))
+    for j, p in enumerate(reps[nr:]):
+        i = nr + 2 * j
+        r = coef.c[:, i] + 1j * coef.c[:, i + 1]
+        poles += [complex(p), complex(np.conj(p))]
+        res += [r, np.conj(r)]
+    # undo the frequency scaling: s' = s / w0, p = w0 p', r = w0 r', e = e' / w0
+    p_arr = np.asarray(np.array(poles, dtype=complex) * omega_scale, dtype=complex)
+    if poles:
+        r_arr = np.asarray(
+            np.array(res, dtype=complex).reshape(len(poles), fd.n_out, fd.n_in) * omega_scale,
+            dtype=complex,
+        )
+    else:
+        r_arr = np.zeros((0, fd.n_out, fd.n_in), complex)
+    d = coef.d.reshape(fd.n_out, fd.n_in) if fit_d else np.zeros((fd.n_out, fd.n_in))
+    e = coef.e.reshape(fd.n_out, fd.n_in) / omega_scale if fit_e else None
+    if not (np.all(np.isfinite(p_arr)) and np.all(np.isfinite(r_arr)) and np.all(np.isfinite(d))):
+        raise FitError("vector fitting produced non-finite poles or residues")
+    del m
+    return RationalModel(poles=p_arr, residues=r_arr, d=d, e=e, kind=fd.kind, z0=fd.z0)
+
+
+def fit_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float, float]:
+    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4)."""
+    diff = model(fd.freq_hz) - fd.values
+    rms = float(np.sqrt(np.mean(np.abs(diff) ** 2)))
+    rel = float(np.linalg.norm(diff) / max(float(np.linalg.norm(fd.values)), 1e-300))
+    return rms, rel, float(np.max(np.abs(diff)))
+
+
+def _make_report(
+    model: RationalModel,
+    fd: FrequencyData,
+    prob: _vf_core.Problem,
+    coef: _vf_core.Coefficients,
+    n_it: int,
+    converged: bool,
+    reason: str,
+    noise: float | None,
+    history: tuple[_vf_core.IterationRecord, ...],
+    wname: str,
+) -> FitReport:
+    rms, rel, mx = fit_errors(model, fd)
+    wrel = _vf_core.weighted_rel_rms(prob, _vf_core.evaluate(prob, coef))
+    steps = tuple(
+        FitStep(r.order, float(r.weighted_rel_rms), float(r.sigma_deviation)) for r in history
+    )
+    return FitReport(
+        order=model.n_poles,
+        n_iterations=int(n_it),
+        rms_error=rms,
+        rel_rms_error=rel,
+        weighted_rel_rms_error=float(wrel),
+        max_abs_error=mx,
+        converged=bool(converged),
+        order_reason=reason,
+        noise_floor=None if noise is None else float(noise),
+        history=steps,
+        weighting=wname,
+        kind=fd.kind,
+    )

@@ -1,0 +1,103 @@
+"""The ``fit`` job: spectra -> vector fit -> passivity check/enforcement -> model (+ SPICE).
+
+Several spectra are fitted together with common poles as a block-diagonal model: file k
+contributes its ports to the block k (all files must share the frequency grid and, after
+conversion, the kind).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+
+from vfmodel._choices import Kind
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.progress import Progress, no_progress
+from vfmodel.core.rational_model import RationalModel
+from vfmodel.errors import InputError
+from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
+from vfmodel.fitting.vectfit import FitReport, fit_errors, vector_fit
+
+
+@dataclass(frozen=True)
+class FitJobResult:
+    """What the ``fit`` job produced."""
+
+    data: FrequencyData
+    model: RationalModel
+    fit: FitReport
+    passivity: PassivityReport | None
+    unconstrained_rel_rms_error: float
+    rms_error: float
+    rel_rms_error: float
+
+
+def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> FrequencyData:
+    """One block-diagonal response from several spectra on the same frequency grid."""
+    if not spectra:
+        raise InputError("no spectrum given", expected="one or more spectrum files")
+    target: Kind = kind or spectra[0].kind
+    conv = [s.to_kind(target) if target != "H" or s.kind == "H" else s for s in spectra]
+    if target == "H" and any(s.kind != "H" for s in spectra):
+        raise InputError("cannot fit network parameters as H", expected="--kind Z, Y or S")
+    if len(conv) == 1:
+        return conv[0]
+    f0 = conv[0].freq_hz
+    for s in conv[1:]:
+        if s.n_freq != f0.size or np.max(np.abs(s.freq_hz - f0)) > 1e-9 * f0[-1]:
+            raise InputError(
+                "spectra fitted together must share the frequency grid",
+                source=s.source,
+                found=f"{s.n_freq} points {s.freq_hz[0]:g}-{s.freq_hz[-1]:g} Hz",
+                expected=f"the {f0.size} points of {conv[0].source}",
+            )
+    z0s = {s.z0 for s in conv}
+    if target == "S" and len(z0s) > 1:
+        raise InputError("S spectra with different z0", found=str(sorted(z0s)))  # type: ignore[type-var]
+    n_out = sum(s.n_out for s in conv)
+    n_in = sum(s.n_in for s in conv)
+    values = np.zeros((f0.size, n_out, n_in), complex)
+    i = j = 0
+    labels: list[str] = []
+    for s in conv:
+        values[:, i : i + s.n_out, j : j + s.n_in] = s.values
+        i, j = i + s.n_out, j + s.n_in
+        stem = (s.source or "spectrum").rsplit("/", 1)[-1]
+        labels += [f"{stem}:{k + 1}" for k in range(s.n_out)]
+    return FrequencyData(f0, values, kind=target, z0=conv[0].z0, labels=tuple(labels),
+                         source=", ".join(s.source or "?" for s in conv))
+
+
+def run_fit(
+    spectra: list[FrequencyData],
+    *,
+    order: int | Literal["auto"] = "auto",
+    kind: Kind | None = None,
+    weighting: Literal["uniform", "inv_abs", "inv_sqrt_abs"] = "uniform",
+    passive: bool = False,
+    progress: Progress = no_progress,
+) -> FitJobResult:
+    """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models."""
+    data = combine_spectra(spectra, kind)
+    progress("vector fit", 0, 2 if passive else 1)
+    model, report = vector_fit(data, order=order, weighting=weighting)
+    _, unconstrained_rel, _ = fit_errors(model, data)
+    progress("vector fit", 1, 2 if passive else 1)
+    pas: PassivityReport | None = None
+    if data.kind in ("Z", "Y", "S") and data.n_out == data.n_in:
+        pas = check_passivity(model)
+        if passive and not pas.passive:
+            model, pas = enforce_passivity(model, data)
+    elif passive:
+        raise InputError(
+            "passivity is defined for square Z, Y or S data only",
+            found=f"{data.kind} {data.n_out}x{data.n_in}",
+            expected="--kind Z, Y or S",
+        )
+    if passive:
+        progress("vector fit", 2, 2)
+    rms, rel, _ = fit_errors(model, data)
+    report = replace(report, rms_error=rms, rel_rms_error=rel)  # errors of the final model
+    return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel)

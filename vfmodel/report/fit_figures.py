@@ -1,0 +1,62 @@
+"""Figures of a vector fit: data vs model magnitude, phase and error per entry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.rational_model import RationalModel
+from vfmodel.report._mpl import pyplot, save
+
+_MAX_ENTRIES = 16
+
+
+def plot_fit(data: FrequencyData, model: RationalModel, path: Path, title: str = "") -> None:
+    """|H| of data and model and the absolute error, for up to 16 entries."""
+    plt = pyplot()
+    h = model(data.freq_hz)
+    entries = [(i, j) for i in range(data.n_out) for j in range(data.n_in)]
+    if data.n_out == data.n_in and data.n_out > 1:  # diagonal first, then the rest
+        entries.sort(key=lambda ij: (ij[0] != ij[1], ij))
+    entries = entries[:_MAX_ENTRIES]
+    fig, (ax_m, ax_p) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (i, j) in enumerate(entries):
+        c = colors[k % len(colors)]
+        lab = f"{data.kind}{i + 1}{j + 1}"
+        ax_m.loglog(data.freq_hz, np.abs(data.values[:, i, j]), ".", ms=2, color=c, label=lab)
+        ax_m.loglog(data.freq_hz, np.abs(h[:, i, j]), "-", lw=1, color=c)
+        ax_p.semilogx(data.freq_hz, np.degrees(np.angle(data.values[:, i, j])), ".", ms=2,
+                      color=c)
+        ax_p.semilogx(data.freq_hz, np.degrees(np.angle(h[:, i, j])), "-", lw=1, color=c)
+    err = np.abs(h - data.values).reshape(data.n_freq, -1).max(axis=1)
+    ax_m.loglog(data.freq_hz, np.maximum(err, 1e-300), "k--", lw=0.8, label="max |error|")
+    ax_m.set_ylabel(f"|{data.kind}|")
+    ax_p.set_ylabel("phase (deg)")
+    ax_p.set_xlabel("frequency (Hz)")
+    ax_m.legend(fontsize=7, ncol=4)
+    ax_m.set_title(title or f"vector fit, {model.n_poles} poles (dots: data, lines: model)")
+    for ax in (ax_m, ax_p):
+        ax.grid(True, which="both", alpha=0.3)
+    save(fig, path)
+
+
+def plot_poles(model: RationalModel, path: Path, other: np.ndarray | None = None,
+               other_label: str = "network poles") -> None:
+    """Pole map in the s-plane (Hz), optionally with a second pole set."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 5))
+    p = model.poles / (2 * np.pi)
+    ax.plot(p.real, p.imag, "x", label=f"fitted ({model.n_poles})")
+    if other is not None:
+        q = np.asarray(other) / (2 * np.pi)
+        ax.plot(q.real, q.imag, "o", mfc="none", label=other_label)
+    ax.set_xscale("symlog", linthresh=1e3)
+    ax.set_yscale("symlog", linthresh=1e3)
+    ax.set_xlabel("Re p / 2pi (Hz)")
+    ax.set_ylabel("Im p / 2pi (Hz)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    save(fig, path)
