@@ -1,5 +1,9 @@
 # vfmodel: `make demo` and `make test` are the two set-up commands (CONTRACT section 1).
 PYTHON ?= python3
+# one BLAS thread per process: the test workers and benchmarks run side by side on 2 cores
+export OPENBLAS_NUM_THREADS ?= 1
+export OMP_NUM_THREADS ?= 1
+export MKL_NUM_THREADS ?= 1
 VENV   := .venv
 PY     := $(VENV)/bin/python
 PIP    := $(PY) -m pip

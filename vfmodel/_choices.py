@@ -35,6 +35,9 @@ Effect = Literal[
 ]
 """Effect vocabulary of the discrepancy detective (CONTRACT section 7)."""
 
+BearingState = Literal["standstill", "rotating"]
+"""Bearing lubrication state of the grey-box network: metallic contact closed or open."""
+
 KINDS: tuple[str, ...] = get_args(Kind)
 TOPOLOGIES: tuple[str, ...] = get_args(Topology)
 EFFECTS: tuple[str, ...] = get_args(Effect)
