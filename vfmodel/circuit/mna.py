@@ -1,0 +1,636 @@
+"""Modified nodal analysis in the frequency domain, batched over frequency.
+
+The circuit equations are ``(G + s C) x = B u``, ``y = Cout^T x`` with the unknowns ``x`` =
+non-ground node voltages followed by branch currents (voltage sources, inductors,
+switches, VCVS, CCVS). ``G`` and ``C`` are assembled from a pattern compiled once:
+every parameter-dependent entry is a triplet ``(row, col, coef, param)`` whose value is
+``coef * q(param)`` with ``q = 1/R`` for resistors, ``q = M = k sqrt(L1 L2)`` for mutual
+couplings and ``q = value`` otherwise, so :meth:`MnaSystem.matrices` is two ``bincount``
+calls, without a Python loop over elements.
+
+Stamps (branch current ``i_b`` flows from n+ through the element to n-):
+
+- admittance y between a, b: ``G[a,a] += y, G[b,b] += y, G[a,b] -= y, G[b,a] -= y``;
+- inductor: KCL ``+i_b`` at a, ``-i_b`` at b; row ``v_a - v_b - s L i_b = 0``; mutual
+  ``- s M i_b2`` in row b1 and vice versa (SPICE dot convention: first nodes);
+- voltage source / closed switch: row ``v_a - v_b = u`` (0 for the switch); an open switch
+  has the row ``i_b = 0``, so the switch state does not change the matrix structure;
+- VCVS row ``v_a - v_b - mu (v_c - v_d) = 0``; CCVS row ``v_a - v_b - r i_ctrl = 0``;
+  VCCS ``gm (v_c - v_d)`` and CCCS ``beta i_ctrl`` leave node a and enter node b.
+
+Sensitivities use the adjoint method: with ``x = A^-1 B`` and ``lambda = A^-T Cout``,
+``dH/dp = -lambda^T (dG/dp + s dC/dp) x`` for all frequencies at once.
+
+Solvers (``method``): ``dense`` (batched LAPACK, N <= 100) and ``sparse`` (SuperLU per
+frequency) are direct and exact to rounding; ``auto`` picks one of them by size.
+``hessenberg`` (module ``_hessenberg``) reduces the shifted pencil once to Hessenberg form
+and then costs O(N^2) per frequency. The ``modal`` solver factorises once per parameter
+set: with a real shift ``s0`` and
+``K = (G + s0 C)^-1``, ``T = K C = V diag(theta) V^-1`` gives
+``(G + s C)^-1 = V diag(1 / (1 + (s - s0) theta)) V^-1 K``, so each further frequency
+costs O(N n_in) (fastest; use it for many evaluations with few outputs). Both fast solvers
+are checked against direct solves at the band edges and the middle (norm-wise relative
+agreement 1e-9 over the outputs at each checked frequency) and replaced by the direct
+solver when they fail; their accuracy is norm-wise, so an output far smaller than the
+others at the same frequency (or a derivative that is exactly zero) may carry a larger
+relative error than with the direct solvers.
+
+References
+----------
+C.-W. Ho, A. E. Ruehli, P. A. Brennan, "The modified nodal approach to network analysis",
+IEEE Trans. Circuits Syst. 22(6), 504-509, 1975. doi:10.1109/TCS.1975.1084079
+S. W. Director, R. A. Rohrer, "The generalized adjoint network and network sensitivities",
+IEEE Trans. Circuit Theory 16(3), 318-323, 1969. doi:10.1109/TCT.1969.1082965
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike, NDArray
+
+from vfmodel.circuit._hessenberg import hessenberg_solve
+from vfmodel.circuit.netlist import Circuit, Excitation, Probe
+from vfmodel.errors import CircuitError, InputError
+
+SolveMethod = Literal["auto", "dense", "sparse", "hessenberg", "modal"]
+_DENSE_MAX = 100          # unknowns up to which "auto" uses the dense batched solver
+_CHUNK_BYTES = 64 << 20   # memory for one batch of dense complex matrices
+_MODAL_CHECK = 1e-9       # relative agreement required between modal and direct solves
+
+_BRANCH_KINDS = ("inductor", "vsource", "switch", "vcvs", "ccvs")
+_Q_LIN, _Q_INV, _Q_MUT = 0, 1, 2
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+ArrI = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Batched solution: ``h (n_f, n_out, n_in)``; with the adjoint also ``x`` and ``lam``."""
+
+    h: ArrC
+    x: ArrC | None = None      # (n_f, N, n_in)  A^-1 B
+    lam: ArrC | None = None    # (n_f, N, n_out) A^-T Cout
+    method: str = "dense"
+
+
+@dataclass(frozen=True)
+class MnaSystem:
+    """Compiled MNA pattern of a :class:`Circuit` (build with :meth:`from_circuit`).
+
+    Attributes
+    ----------
+    circuit : Circuit
+    size : int
+        Number of unknowns N.
+    node_index, branch_index : dict
+        Unknown index of each non-ground node and of each element with a branch current.
+    param_names : tuple of str
+        Parameters in the order of value vectors.
+    """
+
+    circuit: Circuit
+    size: int
+    node_index: Mapping[str, int]
+    branch_index: Mapping[str, int]
+    param_names: tuple[str, ...]
+    values0: ArrF
+    fixed_g: tuple[ArrI, ArrF]           # flat index, value (constant entries of G)
+    t_flat: ArrI                         # flat index row*N+col of each triplet
+    t_row: ArrI
+    t_col: ArrI
+    t_coef: ArrF
+    t_is_c: NDArray[np.bool_]
+    t_param: ArrI                        # sorted ascending
+    q_type: NDArray[np.int8]             # per parameter: lin / inv / mutual
+    mut_params: ArrI                     # mutual parameter index, its L1 and L2 indices
+    mut_l1: ArrI
+    mut_l2: ArrI
+    ac_input: ArrF                       # B u for ac(): every source at its AC value
+
+    # ------------------------------------------------------------------ compile
+    @classmethod
+    def from_circuit(cls, circuit: Circuit) -> MnaSystem:
+        """Check the topology and compile the stamp pattern (done once per structure)."""
+        circuit.check()
+        gnd = circuit.ground
+        node_index = {n: i for i, n in enumerate(circuit.nodes)}
+        nn = len(node_index)
+        branch_index: dict[str, int] = {}
+        for el in circuit.elements:
+            if el.kind in _BRANCH_KINDS:
+                branch_index[el.name] = nn + len(branch_index)
+        size = nn + len(branch_index)
+        pidx = {name: i for i, name in enumerate(circuit.param_names)}
+
+        def ni(n: str) -> int:
+            return -1 if n == gnd else node_index[n]
+
+        rows: list[int] = []
+        cols: list[int] = []
+        coefs: list[float] = []
+        is_c: list[bool] = []
+        tpar: list[int] = []
+        fr: list[int] = []
+        fc: list[int] = []
+        fv: list[float] = []
+        q_type = np.zeros(len(pidx), np.int8)
+        mut: list[tuple[int, int, int]] = []
+        b_ac = np.zeros(size)
+
+        def trip(r: int, c: int, coef: float, p: int, cap: bool = False) -> None:
+            if r >= 0 and c >= 0:
+                rows.append(r)
+                cols.append(c)
+                coefs.append(coef)
+                is_c.append(cap)
+                tpar.append(p)
+
+        def fixed(r: int, c: int, v: float) -> None:
+            if r >= 0 and c >= 0:
+                fr.append(r)
+                fc.append(c)
+                fv.append(v)
+
+        def admittance(a: int, b: int, p: int, cap: bool) -> None:
+            trip(a, a, 1.0, p, cap)
+            trip(b, b, 1.0, p, cap)
+            trip(a, b, -1.0, p, cap)
+            trip(b, a, -1.0, p, cap)
+
+        def incidence(a: int, b: int, br: int) -> None:
+            # KCL: branch current leaves a, enters b; branch row: v_a - v_b
+            fixed(a, br, 1.0)
+            fixed(b, br, -1.0)
+            fixed(br, a, 1.0)
+            fixed(br, b, -1.0)
+
+        for el in circuit.elements:
+            p = pidx.get(el.name, -1)
+            a = ni(el.nodes[0]) if el.nodes else -1
+            b = ni(el.nodes[1]) if el.nodes else -1
+            k = el.kind
+            if k == "resistor":
+                q_type[p] = _Q_INV
+                admittance(a, b, p, False)
+            elif k == "conductance":
+                admittance(a, b, p, False)
+            elif k == "capacitor":
+                admittance(a, b, p, True)
+            elif k == "inductor":
+                br = branch_index[el.name]
+                incidence(a, b, br)
+                trip(br, br, -1.0, p, True)
+            elif k == "mutual":
+                q_type[p] = _Q_MUT
+                b1, b2 = (branch_index[r] for r in el.refs)
+                trip(b1, b2, -1.0, p, True)
+                trip(b2, b1, -1.0, p, True)
+                mut.append((p, pidx[el.refs[0]], pidx[el.refs[1]]))
+            elif k == "switch":
+                br = branch_index[el.name]
+                if el.closed:
+                    incidence(a, b, br)
+                else:
+                    fixed(a, br, 1.0)
+                    fixed(b, br, -1.0)
+                    fixed(br, br, 1.0)
+            elif k == "vsource":
+                br = branch_index[el.name]
+                incidence(a, b, br)
+                b_ac[br] += el.value
+            elif k == "isource":
+                if a >= 0:
+                    b_ac[a] -= el.value
+                if b >= 0:
+                    b_ac[b] += el.value
+            elif k in ("vcvs", "vccs"):
+                c, d = ni(el.nodes[2]), ni(el.nodes[3])
+                if k == "vcvs":
+                    br = branch_index[el.name]
+                    incidence(a, b, br)
+                    trip(br, c, -1.0, p)
+                    trip(br, d, 1.0, p)
+                else:
+                    trip(a, c, 1.0, p)
+                    trip(a, d, -1.0, p)
+                    trip(b, c, -1.0, p)
+                    trip(b, d, 1.0, p)
+            elif k == "cccs":
+                bc = branch_index[el.refs[0]]
+                trip(a, bc, 1.0, p)
+                trip(b, bc, -1.0, p)
+            elif k == "ccvs":
+                br = branch_index[el.name]
+                incidence(a, b, br)
+                trip(br, branch_index[el.refs[0]], -1.0, p)
+        order = np.argsort(np.asarray(tpar, dtype=np.intp), kind="stable")
+        t_row = np.asarray(rows, dtype=np.intp)[order]
+        t_col = np.asarray(cols, dtype=np.intp)[order]
+        mut_a = np.asarray(mut, dtype=np.intp).reshape(-1, 3)
+        return cls(
+            circuit=circuit,
+            size=size,
+            node_index=node_index,
+            branch_index=branch_index,
+            param_names=circuit.param_names,
+            values0=circuit.param_values,
+            fixed_g=(np.asarray(fr, dtype=np.intp) * size + np.asarray(fc, dtype=np.intp),
+                     np.asarray(fv, dtype=float)),
+            t_flat=t_row * size + t_col,
+            t_row=t_row,
+            t_col=t_col,
+            t_coef=np.asarray(coefs, dtype=float)[order],
+            t_is_c=np.asarray(is_c, dtype=bool)[order],
+            t_param=np.asarray(tpar, dtype=np.intp)[order],
+            q_type=q_type,
+            mut_params=mut_a[:, 0].copy(),
+            mut_l1=mut_a[:, 1].copy(),
+            mut_l2=mut_a[:, 2].copy(),
+            ac_input=b_ac,
+        )
+
+    # ------------------------------------------------------------------ parameters
+    def values(self, values: Mapping[str, float] | ArrayLike | None = None) -> ArrF:
+        """Full parameter vector from ``None`` (circuit values), a mapping or a vector.
+
+        A complex vector is kept complex (complex-step differentiation: the stamps are
+        analytic in the values); otherwise the result is real.
+        """
+        if values is None:
+            return self.values0
+        if isinstance(values, Mapping):
+            v = self.values0.copy()
+            index = {n: i for i, n in enumerate(self.param_names)}
+            for k, x in values.items():
+                if k not in index:
+                    raise CircuitError(f"{k!r} is not a parameter of the circuit")
+                v[index[k]] = float(x)
+            return v
+        v = np.asarray(values)
+        v = v.astype(complex if np.iscomplexobj(v) else float).ravel()
+        if v.size != len(self.param_names):
+            raise CircuitError(f"{v.size} parameter values given, expected "
+                               f"{len(self.param_names)} (see param_names)")
+        return v
+
+    def _check_values(self, v_in: ArrF) -> None:
+        bad = ~np.isfinite(v_in)
+        v = v_in.real
+        kinds = self.q_type
+        bad |= (kinds == _Q_INV) & (v == 0)
+        if not self.circuit.allow_negative:
+            el_kinds = [self.circuit.element(n).kind for n in self.param_names] \
+                if np.any(v <= 0) else []
+            for i, kd in enumerate(el_kinds):
+                if kd in ("resistor", "inductor", "capacitor") and v[i] <= 0:
+                    bad[i] = True
+                if kd == "conductance" and v[i] < 0:
+                    bad[i] = True
+        if self.mut_params.size:
+            km = v[self.mut_params]
+            bad[self.mut_params] |= ~((np.abs(km) > 0) & (np.abs(km) <= 1))
+        if np.any(bad):
+            i = int(np.flatnonzero(bad)[0])
+            name = self.param_names[i]
+            raise CircuitError(f"element {name!r} ({self.circuit.element(name).kind}): "
+                               f"value {v[i]!r} is not allowed")
+
+    def _q(self, v: ArrF) -> tuple[ArrF, ArrF]:
+        """Stamp quantities q(v) and their diagonal derivative dq/dv."""
+        q = v.copy()
+        dq = np.ones_like(v)
+        inv = self.q_type == _Q_INV
+        q[inv] = 1.0 / v[inv]
+        dq[inv] = -1.0 / v[inv] ** 2
+        if self.mut_params.size:
+            ll = v[self.mut_l1] * v[self.mut_l2]
+            root = np.sqrt(ll) if np.iscomplexobj(ll) else np.sqrt(np.abs(ll))
+            q[self.mut_params] = v[self.mut_params] * root
+            dq[self.mut_params] = root
+        return q, dq
+
+    def matrices(self, values: Mapping[str, float] | ArrayLike | None = None
+                 ) -> tuple[ArrF, ArrF]:
+        """Dense ``(G, C)`` for the given parameter values."""
+        v = self.values(values)
+        self._check_values(v)
+        q, _ = self._q(v)
+        n2 = self.size * self.size
+        w = self.t_coef * q[self.t_param]
+        g = _scatter(self.t_flat[~self.t_is_c], w[~self.t_is_c], n2)
+        g = g + np.bincount(self.fixed_g[0], self.fixed_g[1], minlength=n2)
+        c = _scatter(self.t_flat[self.t_is_c], w[self.t_is_c], n2)
+        return (np.asarray(g).reshape(self.size, self.size),
+                np.asarray(c).reshape(self.size, self.size))
+
+    # ------------------------------------------------------------------ inputs / outputs
+    def input_matrix(self, inputs: Sequence[Excitation]) -> ArrF:
+        """B (N, n_in): unit source amplitude or unit current injected into a node pair."""
+        b = np.zeros((self.size, len(inputs)))
+        for j, inp in enumerate(inputs):
+            if isinstance(inp, tuple):
+                p, n = (self._node(x, "input") for x in inp)
+                if p >= 0:
+                    b[p, j] += 1.0
+                if n >= 0:
+                    b[n, j] -= 1.0
+                continue
+            el = self.circuit.element(inp)
+            if el.kind == "vsource":
+                b[self.branch_index[inp], j] = 1.0
+            elif el.kind == "isource":
+                a, n = (self._node(x, "input") for x in el.nodes)
+                if a >= 0:
+                    b[a, j] -= 1.0
+                if n >= 0:
+                    b[n, j] += 1.0
+            else:
+                raise CircuitError(f"input {inp!r} is a {el.kind}; expected an independent "
+                                   "source name or a node pair")
+        return b
+
+    def output_matrix(self, outputs: Sequence[Probe]) -> ArrF:
+        """Cout (N, n_out): node voltage, node-pair voltage, or ``"i(name)"`` branch current."""
+        c = np.zeros((self.size, len(outputs)))
+        for j, out in enumerate(outputs):
+            if isinstance(out, tuple):
+                p, n = (self._node(x, "output") for x in out)
+                if p >= 0:
+                    c[p, j] += 1.0
+                if n >= 0:
+                    c[n, j] -= 1.0
+            elif out.startswith("i(") and out.endswith(")"):
+                name = out[2:-1]
+                if name not in self.branch_index:
+                    raise CircuitError(f"output {out!r}: {name!r} has no branch current "
+                                       f"(expected a voltage source, inductor, switch, VCVS "
+                                       f"or CCVS)")
+                c[self.branch_index[name], j] = 1.0
+            else:
+                k = self._node(out, "output")
+                if k >= 0:
+                    c[k, j] = 1.0
+        return c
+
+    def _node(self, name: str, what: str) -> int:
+        if name == self.circuit.ground:
+            return -1
+        try:
+            return self.node_index[name]
+        except KeyError:
+            raise CircuitError(f"{what}: node {name!r} is not in the circuit") from None
+
+    # ------------------------------------------------------------------ solving
+    def solve(self, freq_hz: ArrayLike, b: ArrF, cout: ArrF,
+              values: Mapping[str, float] | ArrayLike | None = None, *,
+              adjoint: bool = False, method: SolveMethod = "auto") -> Solution:
+        """Solve for all frequencies: ``H = Cout^T (G + sC)^-1 B`` (and x, lambda if adjoint)."""
+        f = _freq(freq_hz)
+        g, c = self.matrices(values)
+        s = np.asarray(2j * np.pi * f, dtype=np.complex128)
+        direct: SolveMethod = "dense" if self.size <= _DENSE_MAX else "sparse"
+        if method == "auto":
+            method = direct
+        if method == "hessenberg":
+            sol = _solve_hessenberg(g, c, s, b, cout, adjoint)
+            if sol is not None:
+                return sol
+            method = direct
+        if method == "modal":
+            sol = _solve_modal(g, c, s, b, cout, adjoint)
+            if sol is not None:
+                return sol
+            method = direct
+        if method == "dense":
+            return _solve_dense(g, c, s, b, cout, adjoint)
+        if method == "sparse":
+            return _solve_sparse(g, c, s, b, cout, adjoint)
+        raise InputError(f"method: got {method!r}; expected 'auto', 'dense', 'sparse', "
+                         "'hessenberg' or 'modal'")
+
+    def response(self, freq_hz: ArrayLike, inputs: Sequence[Excitation],
+                 outputs: Sequence[Probe],
+                 values: Mapping[str, float] | ArrayLike | None = None, *,
+                 method: SolveMethod = "auto") -> ArrC:
+        """Transfer matrix (n_freq, n_out, n_in) from ``inputs`` to ``outputs``.
+
+        Inputs are independent-source names (unit amplitude; every other source is zero:
+        voltage sources shorted, current sources open) or node pairs ``(p, n)`` (unit
+        current into p out of n). Outputs are node names, node pairs or ``"i(name)"``.
+        With node pairs on both sides this is the open-circuit impedance matrix.
+        """
+        sol = self.solve(freq_hz, self.input_matrix(inputs), self.output_matrix(outputs),
+                         values, method=method)
+        return sol.h
+
+    def response_and_jacobian(
+        self, freq_hz: ArrayLike, inputs: Sequence[Excitation], outputs: Sequence[Probe],
+        values: Mapping[str, float] | ArrayLike | None = None, *,
+        params: Sequence[str] | None = None, method: SolveMethod = "auto",
+    ) -> tuple[ArrC, ArrC]:
+        """Response and its derivatives by the adjoint method.
+
+        Returns
+        -------
+        h : (n_freq, n_out, n_in) complex
+        jac : (n_freq, n_out, n_in, n_params) complex
+            ``d h / d value`` for ``params`` (default: all :attr:`param_names`).
+        """
+        v = self.values(values)
+        sol = self.solve(freq_hz, self.input_matrix(inputs), self.output_matrix(outputs), v,
+                         adjoint=True, method=method)
+        assert sol.x is not None and sol.lam is not None
+        s = np.asarray(2j * np.pi * _freq(freq_hz), dtype=np.complex128)
+        _, dq = self._q(v)
+        # per triplet t: -lam[row_t] * coef_t * (s or 1) * x[col_t], summed per parameter
+        w = np.where(self.t_is_c[None, :], s[:, None], 1.0) * self.t_coef[None, :]
+        lr = sol.lam[:, self.t_row, :]                       # (f, t, o)
+        xc = sol.x[:, self.t_col, :]                         # (f, t, i)
+        prod = -np.einsum("fto,fti,ft->foit", lr, xc, w, optimize=True)
+        n_p = len(self.param_names)
+        jac = np.zeros((*prod.shape[:3], n_p), dtype=complex)
+        if self.t_param.size:
+            starts = np.flatnonzero(np.r_[True, np.diff(self.t_param) != 0])
+            present = self.t_param[starts]
+            jac[..., present] = np.add.reduceat(prod, starts, axis=3)
+        dsl = jac.copy()                                      # d h / d q
+        jac *= dq
+        if self.mut_params.size:
+            # M = k sqrt(L1 L2): dM/dL1 = M / (2 L1), dM/dL2 = M / (2 L2)
+            m = v[self.mut_params] * np.sqrt(np.abs(v[self.mut_l1] * v[self.mut_l2]))
+            for mp, l1, l2, mm in zip(self.mut_params, self.mut_l1, self.mut_l2, m,
+                                      strict=True):
+                jac[..., l1] += dsl[..., mp] * mm / (2 * v[l1])
+                jac[..., l2] += dsl[..., mp] * mm / (2 * v[l2])
+        if params is not None:
+            index = {n: i for i, n in enumerate(self.param_names)}
+            try:
+                sel = [index[p] for p in params]
+            except KeyError as err:
+                raise CircuitError(f"{err.args[0]!r} is not a parameter of the circuit") \
+                    from None
+            jac = jac[..., sel]
+        return sol.h, jac
+
+    def ac(self, freq_hz: ArrayLike, outputs: Sequence[Probe],
+           values: Mapping[str, float] | ArrayLike | None = None, *,
+           method: SolveMethod = "auto") -> ArrC:
+        """Outputs (n_freq, n_out) with every independent source at its AC amplitude."""
+        sol = self.solve(freq_hz, self.ac_input[:, None], self.output_matrix(outputs), values,
+                         method=method)
+        return sol.h[:, :, 0]
+
+
+@dataclass(frozen=True)
+class CircuitTransfer:
+    """``H(freq_hz) -> (n_freq, n_out, n_in)`` of a circuit (see :meth:`MnaSystem.response`).
+
+    Usable wherever a model callable on frequencies is accepted (e.g. ``vfmodel.simulate``).
+    """
+
+    mna: MnaSystem
+    inputs: tuple[Excitation, ...]
+    outputs: tuple[Probe, ...]
+    method: SolveMethod = "auto"
+    values: ArrF | None = None     # parameter vector (default: the circuit's values)
+
+    @property
+    def n_in(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def n_out(self) -> int:
+        return len(self.outputs)
+
+    def __call__(self, freq_hz: ArrayLike) -> ArrC:
+        return self.mna.response(freq_hz, self.inputs, self.outputs, self.values,
+                                 method=self.method)
+
+
+# ---------------------------------------------------------------------- kernels
+def _scatter(idx: ArrI, w: NDArray[Any], n: int) -> NDArray[Any]:
+    if np.iscomplexobj(w):
+        return np.bincount(idx, w.real, minlength=n) + 1j * np.bincount(idx, w.imag, minlength=n)
+    return np.bincount(idx, w, minlength=n)
+
+
+def _freq(freq_hz: ArrayLike) -> ArrF:
+    """Frequencies (Hz) as a 1-D array; negative values give s = -j w (conjugate side)."""
+    f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    if f.ndim != 1 or not np.all(np.isfinite(f)):
+        raise InputError("freq_hz must be a 1-D array of finite frequencies",
+                         found=f"shape {f.shape}")
+    return f
+
+
+def _singular(where: str) -> CircuitError:
+    return CircuitError(
+        f"the MNA matrix is singular {where}: the network has no unique solution there "
+        "(e.g. an LC loop resonating exactly, a node joined only by capacitors at DC, or "
+        "a cut set of inductors and current sources)"
+    )
+
+
+def _solve_dense(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -> Solution:
+    n = g.shape[0]
+    chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+    hs: list[ArrC] = []
+    xs: list[ArrC] = []
+    ls: list[ArrC] = []
+    for k in range(0, s.size, chunk):
+        a = g[None] + s[k:k + chunk, None, None] * c[None]
+        try:
+            x = np.linalg.solve(a, np.broadcast_to(b, (a.shape[0], *b.shape)))
+            lam = (np.linalg.solve(np.swapaxes(a, 1, 2),
+                                   np.broadcast_to(cout, (a.shape[0], *cout.shape)))
+                   if adjoint else None)
+        except np.linalg.LinAlgError:
+            raise _singular(f"between {s[k].imag / 2 / np.pi:.6g} Hz and "
+                            f"{s[min(k + chunk, s.size) - 1].imag / 2 / np.pi:.6g} Hz") \
+                from None
+        hs.append(np.einsum("no,fni->foi", cout, x))
+        if lam is not None:
+            xs.append(np.asarray(x, dtype=np.complex128))
+            ls.append(np.asarray(lam, dtype=np.complex128))
+    h = np.concatenate(hs)
+    if adjoint:
+        return Solution(h, np.concatenate(xs), np.concatenate(ls), "dense")
+    return Solution(h, method="dense")
+
+
+def _solve_sparse(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -> Solution:
+    gs = sp.csc_matrix(g)
+    cs = sp.csc_matrix(c)
+    n = g.shape[0]
+    h = np.empty((s.size, cout.shape[1], b.shape[1]), complex)
+    x = np.empty((s.size, n, b.shape[1]), complex) if adjoint else None
+    lam = np.empty((s.size, n, cout.shape[1]), complex) if adjoint else None
+    for k, sk in enumerate(s):
+        try:
+            lu = spla.splu((gs + sk * cs).astype(complex).tocsc())
+        except RuntimeError:
+            raise _singular(f"at {sk.imag / 2 / np.pi:.6g} Hz") from None
+        xk = lu.solve(b.astype(complex))
+        h[k] = cout.T @ xk
+        if x is not None and lam is not None:
+            x[k] = xk
+            lam[k] = lu.solve(cout.astype(complex), trans="T")
+    return Solution(h, x, lam, "sparse")
+
+
+def _spot_check(h: ArrC, g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF) -> bool:
+    """True when ``h`` agrees with direct solves at the band edges and the middle."""
+    idx = np.unique([0, s.size // 2, s.size - 1])
+    ref = _solve_dense(g, c, s[idx], b, cout, False).h
+    err = np.linalg.norm(h[idx] - ref, axis=(1, 2))
+    scale = np.maximum(np.linalg.norm(ref, axis=(1, 2)), 1e-300)
+    return bool(np.all(np.isfinite(h)) and np.all(err <= _MODAL_CHECK * scale))
+
+
+def _solve_hessenberg(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF,
+                      adjoint: bool) -> Solution | None:
+    """Shifted Hessenberg solve (``_hessenberg``); None when it fails the spot check."""
+    out = hessenberg_solve(g, c, s, b, cout, adjoint)
+    if out is None or not _spot_check(out[0], g, c, s, b, cout):
+        return None
+    return Solution(out[0], out[1], out[2], "hessenberg")
+
+
+def _solve_modal(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF,
+                 adjoint: bool) -> Solution | None:
+    """Eigen-decomposition solve; None when it fails the spot check against direct solves."""
+    w_nonzero = np.abs(s.imag[s.imag != 0])
+    s0 = float(np.sqrt(w_nonzero.min() * w_nonzero.max())) if w_nonzero.size else 1.0
+    a0 = g + s0 * c
+    try:
+        lu = sla.lu_factor(np.asarray(a0, dtype=complex), check_finite=False)
+        t = sla.lu_solve(lu, c.astype(complex), check_finite=False)
+        theta, v = np.linalg.eig(t)
+        vinv = np.linalg.inv(v)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    if not (np.all(np.isfinite(theta)) and np.all(np.isfinite(vinv))):
+        return None
+    d = 1.0 / (1.0 + (s[:, None] - s0) * theta[None, :])        # (f, N)
+    r = vinv @ sla.lu_solve(lu, b.astype(complex), check_finite=False)   # (N, n_in)
+    lv = cout.T @ v                                              # (n_out, N)
+    h = np.einsum("ok,fk,ki->foi", lv, d, r, optimize=True)
+    if not _spot_check(h, g, c, s, b, cout):
+        return None
+    if not adjoint:
+        return Solution(h, method="modal")
+    x = np.matmul(v, d[:, :, None] * r[None])                   # (f, N, n_in)
+    # lambda = A^-T cout = K^T V^-T diag(d) V^T cout
+    p = sla.lu_solve(lu, vinv.T, trans=1, check_finite=False)   # K^T V^-T
+    q = v.T @ cout                                               # (N, n_out)
+    lam = np.matmul(p, d[:, :, None] * q[None])                  # (f, N, n_out)
+    return Solution(h, x, lam, "modal")
