@@ -142,3 +142,28 @@ def test_bad_inputs() -> None:
         simulate(m, xn, FS)
     with pytest.raises(InputError, match="different lengths"):
         simulate(m, [x[0], x[1], x[2][:-1]], FS)
+
+
+def test_very_slow_pole_matches_lsim() -> None:
+    """A pole far slower than the record (time constant ~ 4 h at 100 MS/s, as a vector fit
+    of an inductive path to ground produces) is exact: reference scipy.signal.lsim."""
+    from scipy import signal
+
+    from vfmodel.signals.simulate import simulate_blocks
+
+    fs, n = 1e8, 2000
+    p = np.array([-6.28e-5, -2e3 + 5e6j, -2e3 - 5e6j])
+    r = np.array([1e5, 3e4 + 1e4j, 3e4 - 1e4j])
+    model = RationalModel(p, r, kind="H")
+    x = np.zeros((1, n))
+    x[0, 100:300] = 1.0
+    t = np.arange(n) / fs
+    ss = model.to_state_space()
+    _, y_ref, _ = signal.lsim((ss.a, ss.b, ss.c, ss.d), x[0], t)
+    scale = np.max(np.abs(y_ref))
+    y = simulate(model, x, fs, input_model="linear")
+    assert np.max(np.abs(y[0] - y_ref)) < 1e-9 * scale
+    blocks = (x[:, i : i + 300] for i in range(0, n, 300))
+    yb = np.concatenate(list(simulate_blocks(model, blocks, fs, n_in=1,
+                                             input_model="linear", fft_len=4096)), axis=1)
+    assert np.max(np.abs(yb[0] - y_ref)) < 1e-9 * scale

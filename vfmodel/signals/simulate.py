@@ -347,10 +347,31 @@ def _stream(
     n_fft: int,
     n_total: int | None = None,
 ) -> Iterator[NDArray[np.float64]]:
-    hgrid = discrete_transfer(model, fs, n_fft, input_model)  # (n_f, n_out, n_in)
     b_len = n_fft - a_len - p_len
     ov = a_len + p_len
     pdat = _pole_data(rm, fs) if rm is not None and rm.n_poles else None
+    slow: _SlowPoles | None = None
+    hgrid: NDArray[np.complex128] | None = None  # discrete transfer (n_f, n_out, n_in)
+    if rm is not None and pdat is not None:
+        # Poles whose tail barely decays over one FFT window (|1 - a^N| small) make the
+        # closed-form wrap-around correction cancel catastrophically; they run as exact
+        # first-order-hold recursions in the time domain instead (few, O(n) each).
+        is_slow = np.abs(1 - np.exp(pdat.q * n_fft)) < 0.5
+        if np.any(is_slow):
+            slow = _SlowPoles.from_model(rm, is_slow, fs, n_in)
+            sm = RationalModel(rm.poles[is_slow], rm.residues[is_slow], kind="H")
+            fast = RationalModel(rm.poles[~is_slow], rm.residues[~is_slow], rm.d, rm.e,
+                                 kind="H")
+            # the fast part directly (subtracting the huge DC gain of a slow pole from the
+            # full transfer would leave its rounding error in every sample)
+            hgrid = discrete_transfer(fast, fs, n_fft, input_model)
+            if input_model == "bandlimited":
+                hgrid = hgrid + (discrete_transfer(sm, fs, n_fft, "bandlimited")
+                                 - discrete_transfer(sm, fs, n_fft, "linear"))
+            pdat = _subset(pdat, ~is_slow) if np.any(~is_slow) else None
+    if hgrid is None:
+        hgrid = discrete_transfer(model, fs, n_fft, input_model)
+    slow_buf = np.zeros((n_out, 0))
     acc = np.zeros((n_out, ov))
     z_state = None if pdat is None else np.zeros((pdat.q.size, n_out), complex)
     skip = a_len  # output times before 0
@@ -359,6 +380,8 @@ def _stream(
     for x in chunks:
         lb = x.shape[1]
         end += lb
+        if slow is not None:
+            slow_buf = np.concatenate([slow_buf, slow.step(x)], axis=1)
         xpad = np.zeros((n_in, n_fft))
         xpad[:, a_len : a_len + lb] = x
         xf = sfft.rfft(xpad, axis=-1)  # (n_in, n_f)
@@ -385,9 +408,50 @@ def _stream(
         if emitted_to > end:  # last (short) chunk: stop at the end of the record
             out = out[:, : max(out.shape[1] - (emitted_to - end), 0)]
         if out.shape[1]:
+            if slow is not None:
+                out = out + slow_buf[:, : out.shape[1]]
+                slow_buf = slow_buf[:, out.shape[1] :]
             yield out
     if emitted_to < end:
-        yield acc[:, : end - emitted_to]
+        last = acc[:, : end - emitted_to]
+        yield last + slow_buf[:, : last.shape[1]] if slow is not None else last
+
+
+def _subset(p: _Poles, keep: NDArray[np.bool_]) -> _Poles:
+    return _Poles(q=p.q[keep], a=p.a[keep], c=p.c[keep], r=p.r[keep])
+
+
+@dataclass
+class _SlowPoles:
+    """Exact first-order-hold recursions of slow poles, state carried across blocks.
+
+    Per unit residue the FOH impulse response is ``g[0] = T phi``, ``g[n] = c a^{n-1}``,
+    i.e. ``G(z) = (T phi + (c - a T phi) z^-1) / (1 - a z^-1)``.
+    """
+
+    b: NDArray[np.complex128]  # (n_slow, 2)
+    a: NDArray[np.complex128]  # (n_slow,)
+    r: NDArray[np.complex128]  # (n_slow, n_out, n_in)
+    zi: NDArray[np.complex128]  # (n_slow, n_in, 1)
+
+    @classmethod
+    def from_model(cls, rm: RationalModel, keep: NDArray[np.bool_], fs: float,
+                   n_in: int) -> _SlowPoles:
+        p = _pole_data(rm, fs)
+        t = 1.0 / fs
+        _, phi = _psi_phi(p.q[keep])
+        a = p.a[keep]
+        b = np.stack([t * phi, p.c[keep] - a * t * phi], axis=1)
+        return cls(b=b, a=a, r=p.r[keep], zi=np.zeros((a.size, n_in, 1), complex))
+
+    def step(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        from scipy.signal import lfilter
+
+        y = np.zeros((self.r.shape[1], x.shape[1]), complex)
+        for k in range(self.a.size):
+            v, self.zi[k] = lfilter(self.b[k], [1.0, -self.a[k]], x, axis=-1, zi=self.zi[k])
+            y += self.r[k] @ v
+        return np.asarray(y.real, dtype=float)
 
 
 def simulate(
