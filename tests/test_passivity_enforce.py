@@ -1,0 +1,93 @@
+"""Passivity enforcement: certified by the Hamiltonian test and by dense sampling."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import vfmodel.fitting._enforce as enforce_mod
+from tests._random_models import TWO_PI, random_nonpassive, ref_grid, ref_margin
+from vfmodel import FrequencyData, RationalModel, check_passivity, enforce_passivity
+from vfmodel.errors import PassivityError, SolverError
+
+
+def _certify_random(seed: int, cases: list[tuple[str, int, bool]]) -> None:
+    rng = np.random.default_rng(seed)
+    iterations = []
+    for i, (kind, n, singular) in enumerate(cases):
+        model = random_nonpassive(rng, kind, n, singular_d=singular)
+        assert not check_passivity(model).passive
+        fixed, report = enforce_passivity(model)
+        assert report.passive and report.method == "hamiltonian" and report.iterations >= 1
+        iterations.append(report.iterations)
+        # independent certificate: 1e5-point dense sampling of the margin, which must be
+        # >= 0 up to rounding (1e-12 of the response size)
+        w = ref_grid(fixed)
+        scale = 1.0 if kind == "S" else float(np.max(np.abs(fixed(w / TWO_PI))))
+        assert ref_margin(fixed, w).min() >= -1e-12 * scale, (i, kind, n)
+        # asymptotic conditions hold too
+        assert report.asymptotic_ok and report.d_margin >= -1e-12 * scale
+        # the model changed by the reported amount (on the default grid: model's own response)
+        assert report.rms_change > 0
+    assert max(iterations) <= 30
+
+
+@pytest.mark.slow
+def test_enforcement_50_random_models_certified() -> None:
+    # issue 4: 50 random non-passive models, Z, Y, S, 1-4 ports (minutes on a busy machine)
+    _certify_random(99, [("ZYS"[i % 3], 1 + (i // 3) % 4, i % 5 == 4) for i in range(50)])
+
+
+def test_enforcement_random_small_models_certified() -> None:
+    # the fast share of the above: Z, Y, S with 1 and 2 ports, regular and singular D
+    cases = [(k, n, sing) for k in "ZYS" for n in (1, 2) for sing in (False, True)]
+    _certify_random(7, cases)
+
+
+def test_enforcement_keeps_data_fit_and_reports_rms_change() -> None:
+    rng = np.random.default_rng(5)
+    model = random_nonpassive(rng, "Z", 2)
+    f = np.logspace(3, 7, 300)
+    data = FrequencyData(f, model(f), kind="Z")
+    fixed, report = enforce_passivity(model, data)
+    dh = fixed(f) - model(f)
+    assert report.rms_change == pytest.approx(np.sqrt(np.mean(np.abs(dh) ** 2)), rel=1e-12)
+    assert report.rel_rms_change == pytest.approx(
+        np.linalg.norm(dh) / np.linalg.norm(data.values), rel=1e-12
+    )
+    assert check_passivity(fixed).passive
+    # poles are kept, only residues and D move
+    np.testing.assert_array_equal(fixed.poles, model.poles)
+
+
+def test_passive_model_is_returned_unchanged() -> None:
+    model = RationalModel(poles=[-1e6], residues=[1e6], d=[[1.0]], kind="Z")
+    fixed, report = enforce_passivity(model)
+    assert fixed is model and report.passive and report.iterations == 0
+
+
+def test_unstable_model_is_rejected() -> None:
+    model = RationalModel(poles=[1e3], residues=[-1.0], d=[[1.0]], kind="Y")
+    with pytest.raises(PassivityError, match="unstable"):
+        enforce_passivity(model)
+
+
+def test_solver_status_checked(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Clarabel stopped after one interior-point iteration cannot end "optimal"
+    monkeypatch.setattr(enforce_mod, "_ATTEMPTS", (("norm", {"max_iter": 1}),))
+    model = random_nonpassive(np.random.default_rng(3), "S", 2)
+    with pytest.raises(SolverError, match="optimal"):
+        enforce_passivity(model)
+
+
+def test_iteration_limit_is_a_typed_error() -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(20):  # find a model that needs more than one program
+        model = random_nonpassive(rng, "Y", 3)
+        _, report = enforce_passivity(model)
+        if report.iterations > 1:
+            break
+    else:  # pragma: no cover
+        pytest.fail("no model needing two programs found")
+    with pytest.raises(PassivityError, match="not certified after 1"):
+        enforce_passivity(model, max_iter=1)
