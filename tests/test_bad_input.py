@@ -146,3 +146,14 @@ def test_unknown_output_suffix(tmp_path: Path, agilent: Path,
 def test_usage_error_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["convert"]) == 2
     assert main(["nonsense-command"]) == 2
+
+
+def test_touchstone_bad_option_line_found_by_fuzzing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: an option line glued to data made scikit-rf produce NaN (hypothesis)."""
+    src = tmp_path / "bad.s1p"
+    src.write_bytes(b"! test\n2000 0.102 -0.022\n# Hz Z RI R,0.1 -0.064\n4000 0.106 0.05\n")
+    code, err = _run(capsys, "convert", str(src), str(tmp_path / "out.csv"))
+    assert code == 2 and str(src) in err and "Traceback" not in err
+    assert not (tmp_path / "out.csv").exists()

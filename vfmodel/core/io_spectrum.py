@@ -130,10 +130,21 @@ def _read_touchstone(path: Path) -> FrequencyData:
         )
     if net.f.size == 0:
         raise InputError("Touchstone file has no data points", source=src)
+    if not np.all(np.isfinite(net.s)):
+        raise InputError(
+            "Touchstone data are not finite after conversion",
+            source=src,
+            expected="finite numbers and a valid option line (e.g. '# Hz Z RI R 50')",
+        )
     kind: Kind = "S" if param == "S" else ("Z" if param == "Z" else "Y")
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        data = FrequencyData.from_network(net, kind=kind, source=src)
+    try:
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            data = FrequencyData.from_network(net, kind=kind, source=src)
+    except np.linalg.LinAlgError as err:
+        raise InputError(
+            f"cannot convert the Touchstone data to {kind} parameters ({err})", source=src
+        ) from None
     return data
 
 
