@@ -1,0 +1,277 @@
+"""Assembly of the grey-box PMSM bearing-voltage network (reference paper, Fig. 12).
+
+Nodes: terminals ``U``, ``V``, ``W``; frame/housing = ground ``"0"``; ``F`` the internal
+(ungrounded) end of the frame ladder; ``N`` star point; ``U_m``, ``V_m``, ``W_m`` winding
+midpoints; shaft ``SM`` (rotor middle), ``SN`` (NDE end, bearing voltage ``u_B = v(SN)``),
+``SD`` (DE end).
+
+Per phase ``p``: two winding sections ``p -> p_m -> N`` (:func:`winding_section`),
+terminal capacitance ``C_t`` (``p -> F``), winding-frame insulation (``p_m -> F``,
+``C_wf``), winding-rotor insulation (``p_m -> SM``, ``C_wr``). Air gap ``SM -> F``
+(``C_rf``); frame ladder ``F -> 0``; shaft segments ``SM -> SN`` and ``SM -> SD``; NDE
+bearing ``SN -> F`` and DE bearing ``SD -> F`` with identical parameter values.
+
+Every effect of :data:`vfmodel.greybox.effects.EFFECT_INFO` is a switch of
+:func:`build_network`; ``fixture_inductance`` acts only on the measured spectra
+(:func:`topology_impedance`).
+
+References
+----------
+Reference paper (grey-box bearing-voltage model of a 40-kW PMSM), Sec. III, Figs. 12-17,
+Table IV (C_wr = 637 pF, C_rf = 1287 pF, C_b = 18.1 nF at 100 rpm).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from vfmodel._choices import BearingState, Topology, check_choice
+from vfmodel.circuit.mna import CircuitTransfer
+from vfmodel.circuit.netlist import Circuit, Element
+from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.params import ParamSet, ParamSpec
+from vfmodel.greybox.substructures import (
+    bearing,
+    capacitor,
+    insulation,
+    rl_branch,
+    winding_section,
+)
+
+__all__ = [
+    "BEARING_NODE",
+    "PHASES",
+    "SOURCES",
+    "TOPOLOGY_PORTS",
+    "bearing_transfer",
+    "build_network",
+    "default_params",
+    "divider_capacitances",
+    "element_values",
+    "param_specs",
+    "topology_impedance",
+    "with_terminal_sources",
+]
+
+PHASES = ("U", "V", "W")
+TOPOLOGY_PORTS: dict[str, tuple[str, str]] = {
+    "U-Frame": ("U", "0"), "V-Frame": ("V", "0"), "W-Frame": ("W", "0"),
+    "U-V": ("U", "V"), "V-W": ("V", "W"), "W-U": ("W", "U"),
+}
+"""Node pair of each impedance topology (the third terminal stays open)."""
+SOURCES = ("src.U", "src.V", "src.W")
+"""Names of the unit terminal-to-frame voltage sources of :func:`with_terminal_sources`."""
+BEARING_NODE = "SN"
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+
+def _s(name: str, nominal: float, lo: float, hi: float, group: str, unit: str,
+       desc: str) -> ParamSpec:
+    return ParamSpec(name, nominal, lo, hi, group, unit, desc)
+
+
+def param_specs() -> tuple[ParamSpec, ...]:
+    """Parameter table of the grey-box network with paper-like nominal values (40-kW PMSM).
+
+    Lubricant values are those of 100 rpm (film charged; C_b of one bearing ~ 18 nF).
+    """
+    specs: list[ParamSpec] = []
+    for p in PHASES:
+        g = f"winding.{p}"
+        specs += [
+            _s(f"{g}.R_w", 0.03, 1e-3, 10.0, g, "ohm", "phase DC resistance"),
+            _s(f"{g}.L_w", 5e-4, 1e-6, 1e-2, g, "H", "phase HF inductance"),
+            _s(f"{g}.R_p", 1.5e3, 1.0, 1e6, g, "ohm", "parallel (eddy/iron loss) resistance "
+               "of each section"),
+            _s(f"{g}.C_s", 30e-12, 1e-13, 1e-8, g, "F", "inter-turn capacitance per section"),
+            _s(f"{g}.C_t", 150e-12, 1e-13, 1e-8, g, "F", "terminal-to-frame capacitance"),
+            _s(f"{g}.C_wf", 1.2e-9, 1e-11, 1e-7, g, "F", "winding-to-frame capacitance"),
+        ]
+    specs += [
+        _s("winding.skin_l_frac", 0.1, 1e-3, 0.9, "winding", "", "internal share of L_w"),
+        _s("winding.skin_rho", 5.0, 1.2, 100.0, "winding", "", "ladder ratio"),
+        _s("insulation.R_ins", 1e8, 1e5, 1e12, "insulation", "ohm", "insulation resistance"),
+        _s("insulation.k_d", 0.1, 1e-3, 1.0, "insulation", "", "C_d / C of the loss branch"),
+        _s("insulation.tau_d", 1e-6, 1e-9, 1e-2, "insulation", "s", "relaxation time"),
+        _s("insulation.C_wr", 212e-12, 1e-12, 1e-8, "insulation", "F",
+           "winding-to-rotor capacitance per phase"),
+        _s("airgap.C_rf", 1.29e-9, 1e-11, 1e-7, "insulation", "F", "rotor-to-frame (air gap)"),
+        _s("frame.R_dc", 1e-3, 1e-5, 1.0, "frame", "ohm", "frame DC resistance"),
+        _s("frame.L_ext", 26e-9, 1e-11, 1e-6, "frame", "H", "frame external inductance"),
+        _s("frame.L_int", 4e-9, 1e-11, 1e-6, "frame", "H", "frame internal inductance"),
+        _s("frame.rho", 4.0, 1.2, 100.0, "frame", "", "ladder ratio"),
+        _s("shaft.R_dc", 1e-3, 1e-5, 1.0, "shaft", "ohm", "DC resistance of a segment"),
+        _s("shaft.L_1", 30e-9, 1e-11, 1e-5, "shaft", "H", "inductance SM-SN (NDE side)"),
+        _s("shaft.L_2", 30e-9, 1e-11, 1e-5, "shaft", "H", "inductance SM-SD (DE side)"),
+        _s("shaft.L_int", 10e-9, 1e-11, 1e-5, "shaft", "H", "internal inductance of a segment"),
+        _s("shaft.rho", 4.0, 1.2, 100.0, "shaft", "", "ladder ratio"),
+        _s("ball.R_dc", 5e-3, 1e-5, 10.0, "bearing", "ohm", "ball/contact DC resistance"),
+        _s("ball.L_ext", 30e-9, 1e-11, 1e-5, "bearing", "H", "ball path inductance"),
+        _s("ball.L_int", 10e-9, 1e-11, 1e-5, "bearing", "H", "ball internal inductance"),
+        _s("ball.rho", 4.0, 1.2, 100.0, "bearing", "", "ladder ratio"),
+        _s("bearing.C_air", 100e-12, 1e-13, 1e-8, "bearing", "F", "air capacitance"),
+        _s("bearing.R_h", 0.5, 1e-3, 1e3, "bearing", "ohm", "Hertzian-contact resistance"),
+        _s("bearing.C_edge", 1e-9, 1e-12, 1e-7, "bearing", "F", "Hertzian edge capacitance"),
+        _s("lubricant.R_1", 5e4, 1.0, 1e9, "lubricant", "ohm", "base-oil film resistance"),
+        _s("lubricant.C_1", 20e-9, 1e-11, 1e-6, "lubricant", "F", "base-oil film capacitance"),
+        _s("lubricant.R_2", 1e3, 1e-2, 1e7, "lubricant", "ohm", "thickener layer resistance"),
+        _s("lubricant.C_2", 100e-9, 1e-10, 1e-5, "lubricant", "F", "thickener layer capacitance"),
+        _s("lubricant.k_d", 0.2, 1e-3, 1.0, "lubricant", "", "C_d / C of the loss branch"),
+        _s("lubricant.tau_d", 1e-6, 1e-9, 1e-2, "lubricant", "s", "relaxation time"),
+        _s("fixture.L", 50e-9, 1e-10, 1e-5, "fixture", "H", "fixture/lead inductance"),
+    ]
+    return tuple(specs)
+
+
+def default_params() -> ParamSet:
+    """:func:`param_specs` at their nominal values."""
+    return ParamSet.from_specs(param_specs())
+
+
+def _pget(params: ParamSet | Mapping[str, float]) -> Mapping[str, float]:
+    return params.as_dict() if isinstance(params, ParamSet) else params
+
+
+def build_network(params: ParamSet | Mapping[str, float],
+                  effects: Iterable[str] = PAPER_EFFECTS,
+                  state: BearingState = "standstill", *, n_rungs: int = 3,
+                  sources: bool = False) -> Circuit:
+    """The grey-box network as a :class:`Circuit`.
+
+    Parameters
+    ----------
+    params : ParamSet or mapping
+        Values of the names of :func:`param_specs` (a mapping may hold more names).
+    effects : iterable of Effect
+        Effects switched on (default: the full model of the paper, every effect except
+        ``fixture_inductance``, which only changes the measured spectra).
+    state : "standstill" or "rotating"
+        Metallic-contact switch closed at standstill, open when rotating (only present
+        with ``metallic_contact``).
+    n_rungs : int
+        Rungs of every RL ladder.
+    sources : bool
+        Add unit voltage sources ``src.U``, ``src.V``, ``src.W`` from each terminal to frame.
+    """
+    eff = check_effects(effects)
+    check_choice("state", state, BearingState)
+    v = _pget(params)
+    skin_w = "winding_skin_effect" in eff
+    loss = "insulation_dielectric_loss" in eff
+    els: list[Element] = []
+    ins = dict(r_ins=v["insulation.R_ins"], loss=loss, k_d=v["insulation.k_d"],
+               tau_d=v["insulation.tau_d"])
+    for p in PHASES:
+        g = f"winding.{p}"
+        mid = f"{p}_m"
+        sec = dict(r=v[f"{g}.R_w"] / 2, l_h=v[f"{g}.L_w"] / 2, r_p=v[f"{g}.R_p"],
+                   c_s=v[f"{g}.C_s"], skin=skin_w, l_frac=v["winding.skin_l_frac"],
+                   rho=v["winding.skin_rho"], n_rungs=n_rungs)
+        els += winding_section(f"{g}.s1", p, mid, **sec)  # type: ignore[arg-type]
+        els += winding_section(f"{g}.s2", mid, "N", **sec)  # type: ignore[arg-type]
+        els.append(capacitor(f"{g}.C_t", p, "F", v[f"{g}.C_t"]))
+        els += insulation(f"insulation.wf.{p}", mid, "F", c=v[f"{g}.C_wf"],
+                          **ins)  # type: ignore[arg-type]
+        els += insulation(f"insulation.wr.{p}", mid, "SM", c=v["insulation.C_wr"],
+                          **ins)  # type: ignore[arg-type]
+    els += insulation("airgap", "SM", "F", c=v["airgap.C_rf"], **ins)  # type: ignore[arg-type]
+    els += rl_branch("frame", "F", "0", skin="frame_skin_effect" in eff, r_dc=v["frame.R_dc"],
+                     l_ext=v["frame.L_ext"], l_int=v["frame.L_int"], rho=v["frame.rho"],
+                     n_rungs=n_rungs)
+    for seg, node, lk in (("1", BEARING_NODE, "shaft.L_1"), ("2", "SD", "shaft.L_2")):
+        els += rl_branch(f"shaft.{seg}", "SM", node, skin="shaft_skin_effect" in eff,
+                         r_dc=v["shaft.R_dc"], l_ext=v[lk], l_int=v["shaft.L_int"],
+                         rho=v["shaft.rho"], n_rungs=n_rungs)
+    for side, node in (("NDE", BEARING_NODE), ("DE", "SD")):
+        els += bearing(
+            f"bearing.{side}", node, "F", c_air=v["bearing.C_air"], ball_r=v["ball.R_dc"],
+            ball_l_ext=v["ball.L_ext"], ball_l_int=v["ball.L_int"], ball_rho=v["ball.rho"],
+            ball_skin="ball_skin_effect" in eff, r_h=v["bearing.R_h"],
+            r_1=v["lubricant.R_1"], c_1=v["lubricant.C_1"],
+            two_layer="lubricant_two_layer" in eff, r_2=v["lubricant.R_2"],
+            c_2=v["lubricant.C_2"], lub_loss="lubricant_dielectric_loss" in eff,
+            k_d=v["lubricant.k_d"], tau_d=v["lubricant.tau_d"],
+            edge="hertzian_edge_capacitance" in eff, c_edge=v["bearing.C_edge"],
+            metallic="metallic_contact" in eff, closed=state == "standstill",
+            n_rungs=n_rungs)
+    circ = Circuit(elements=tuple(els), title="vfmodel grey-box PMSM bearing-voltage network")
+    return with_terminal_sources(circ) if sources else circ
+
+
+def with_terminal_sources(circuit: Circuit) -> Circuit:
+    """``circuit`` with unit voltage sources ``src.U/V/W`` from each terminal to ground."""
+    return circuit.extend(Element(name, "vsource", (p, circuit.ground), 1.0)
+                          for name, p in zip(SOURCES, PHASES, strict=True))
+
+
+def element_values(params: ParamSet | Mapping[str, float],
+                   effects: Iterable[str] = PAPER_EFFECTS,
+                   state: BearingState = "standstill", *, n_rungs: int = 3) -> dict[str, float]:
+    """Element values of :func:`build_network` by element name (for ``Circuit.with_params``
+    or ``MnaSystem.response(values=...)`` on a network compiled once)."""
+    c = build_network(params, effects, state, n_rungs=n_rungs)
+    return dict(zip(c.param_names, c.param_values.tolist(), strict=True))
+
+
+def topology_impedance(params: ParamSet | Mapping[str, float], freq_hz: ArrayLike,
+                       topologies: Sequence[str] = tuple(TOPOLOGY_PORTS),
+                       effects: Iterable[str] = PAPER_EFFECTS, *, n_rungs: int = 3,
+                       circuit: Circuit | None = None) -> dict[str, ArrC]:
+    """Impedance spectra of the measurement topologies at standstill (CONTRACT section 2).
+
+    ``U-Frame``: between U and frame with V, W open; ``U-V``: between U and V with W open;
+    etc. With ``fixture_inductance`` the series ``jw fixture.L`` of the measurement leads
+    is added. ``circuit`` (optional) is a prebuilt standstill network to reuse.
+    """
+    eff = check_effects(effects)
+    for t in topologies:
+        check_choice("topology", t, Topology)
+    c = build_network(params, eff, "standstill", n_rungs=n_rungs) if circuit is None \
+        else circuit
+    f = np.asarray(freq_hz, dtype=float)
+    pairs = [TOPOLOGY_PORTS[t] for t in topologies]
+    z = c.mna.response(f, pairs, pairs)
+    out: dict[str, ArrC] = {}
+    fix = 0.0
+    if "fixture_inductance" in eff:
+        fix = _pget(params)["fixture.L"]
+    for i, t in enumerate(topologies):
+        out[t] = z[:, i, i] + 2j * np.pi * f * fix
+    return out
+
+
+def bearing_transfer(params: ParamSet | Mapping[str, float],
+                     effects: Iterable[str] = PAPER_EFFECTS,
+                     state: BearingState = "rotating", *, n_rungs: int = 3,
+                     method: str = "auto") -> CircuitTransfer:
+    """``H(freq_hz) -> (n_f, 1, 3)``: terminal voltages (U, V, W to frame) -> ``v(SN)``."""
+    c = build_network(params, effects, state, n_rungs=n_rungs, sources=True)
+    return CircuitTransfer(c.mna, SOURCES, (BEARING_NODE,), method)  # type: ignore[arg-type]
+
+
+def divider_capacitances(params: ParamSet | Mapping[str, float],
+                         effects: Iterable[str] = PAPER_EFFECTS) -> dict[str, float]:
+    """Low-frequency capacitances of the conventional divider model (paper Fig. 1, eq. 1).
+
+    ``c_wr`` (all three phases), ``c_rf`` (air gap), ``c_b`` (one bearing: series film
+    layers plus edge and air capacitance, each insulation value including its dielectric
+    branch ``(1 + k_d)`` when enabled) and ``bvr = c_wr / (c_wr + c_rf + 2 c_b)``, valid in
+    the rotating state between the film's RC corner and the first resonance.
+    """
+    eff = check_effects(effects)
+    v = _pget(params)
+    kd = 1 + v["insulation.k_d"] if "insulation_dielectric_loss" in eff else 1.0
+    c_wr = 3 * v["insulation.C_wr"] * kd
+    c_rf = v["airgap.C_rf"] * kd
+    c1 = v["lubricant.C_1"] * (1 + v["lubricant.k_d"]
+                               if "lubricant_dielectric_loss" in eff else 1.0)
+    film = c1 * v["lubricant.C_2"] / (c1 + v["lubricant.C_2"]) \
+        if "lubricant_two_layer" in eff else c1
+    c_b = film + v["bearing.C_air"] + (v["bearing.C_edge"]
+                                       if "hertzian_edge_capacitance" in eff else 0.0)
+    return {"c_wr": c_wr, "c_rf": c_rf, "c_b": c_b, "bvr": c_wr / (c_wr + c_rf + 2 * c_b)}

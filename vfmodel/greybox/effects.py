@@ -1,0 +1,213 @@
+"""Effect vocabulary of the grey-box bearing-voltage model (CONTRACT section 7).
+
+Each effect is a switch of :func:`vfmodel.greybox.assembly.build_network`: with the effect
+the network contains the substructure listed in ``adds``; without it a simpler one (or
+nothing). :data:`EFFECT_INFO` holds, per effect, the physics explanation written into a
+``diagnosis.json`` finding, the residual signature the detective looks for, where in the
+network it applies, and the parameters (names of :mod:`vfmodel.greybox.params`) that only
+exist with the effect.
+
+References
+----------
+Reference paper (grey-box bearing-voltage model of a 40-kW PMSM), Sec. III, Figs. 12-17;
+the RL skin-effect ladder follows its ref. [43].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import get_args
+
+from vfmodel._choices import Effect, check_choice
+
+__all__ = ["ALL_EFFECTS", "EFFECT_INFO", "PAPER_EFFECTS", "EffectInfo", "check_effects"]
+
+
+@dataclass(frozen=True)
+class EffectInfo:
+    """Vocabulary entry of one effect.
+
+    Attributes
+    ----------
+    name : Effect
+    adds : str
+        What the effect adds to the network (CONTRACT section 7 wording).
+    explanation : str
+        One or two sentences of physics for a finding.
+    signature : str
+        Residual signature in the data when the effect is missing from the model.
+    locations : tuple of str
+        Where it applies (network location labels, also used as finding ``location``).
+    where : tuple of str
+        Data where the residual shows: ``"impedance:CM"``, ``"impedance:DM"``,
+        ``"bearing:standstill"``, ``"bearing:rotating"``.
+    band_hz : tuple of float
+        Frequency band where the signature is expected.
+    params : tuple of str
+        Parameter names that exist only with the effect.
+    """
+
+    name: Effect
+    adds: str
+    explanation: str
+    signature: str
+    locations: tuple[str, ...]
+    where: tuple[str, ...]
+    band_hz: tuple[float, float]
+    params: tuple[str, ...]
+
+
+_LADDER = ("L_int", "rho")
+
+EFFECT_INFO: dict[str, EffectInfo] = {
+    e.name: e
+    for e in (
+        EffectInfo(
+            "winding_skin_effect",
+            "RL ladder in the winding branches (skin and proximity effect)",
+            "Skin and proximity effect push the winding current to the conductor surface "
+            "at high frequency, so the winding resistance rises roughly with sqrt(f) while "
+            "its internal inductance falls; a plain R-L underestimates the damping of the "
+            "winding resonances.",
+            "CM and DM impedance: resonance peaks too sharp/too high and the inductive "
+            "slope too steep above ~10 kHz in the model; real part of Z too small.",
+            ("winding.U", "winding.V", "winding.W"),
+            ("impedance:CM", "impedance:DM"),
+            (1e4, 1e7),
+            ("winding.skin_l_frac", "winding.skin_rho"),
+        ),
+        EffectInfo(
+            "insulation_dielectric_loss",
+            "series-RC dielectric-loss branch in insulation and air-gap paths (Fig. 13)",
+            "Polarisation of the slot and phase insulation (and the air-gap dielectric) "
+            "adds a relaxation branch, so the insulation capacitance decreases with "
+            "frequency and the CM impedance phase stays a few degrees above -90 degrees.",
+            "CM impedance below the first resonance: magnitude slope shallower than -20 "
+            "dB/decade and phase above -90 degrees; small capacitance mismatch at 1 kHz.",
+            ("insulation.winding-frame", "insulation.winding-rotor", "airgap"),
+            ("impedance:CM",),
+            (1e3, 1e6),
+            ("insulation.k_d", "insulation.tau_d"),
+        ),
+        EffectInfo(
+            "frame_skin_effect",
+            "RL ladder (Fig. 14) for the stator frame instead of a plain R-L",
+            "The frame is a massive conductor: at high frequency the CM return current "
+            "flows in a thin surface layer, raising the frame resistance and lowering its "
+            "internal inductance.",
+            "CM impedance near and above the highest resonance (MHz) and the damping of "
+            "the standstill bearing-voltage ringing.",
+            ("frame",),
+            ("impedance:CM", "bearing:standstill"),
+            (1e6, 1e7),
+            tuple(f"frame.{p}" for p in _LADDER),
+        ),
+        EffectInfo(
+            "shaft_skin_effect",
+            "RL ladders for the shaft segments instead of plain R-L",
+            "The shaft carries the rotor current to the bearings; its skin effect makes the "
+            "shaft impedance rise with sqrt(f) and damps the shaft-bearing ringing.",
+            "Bearing voltage at standstill: ringing amplitude and decay in the MHz range.",
+            ("shaft.1", "shaft.2"),
+            ("bearing:standstill", "bearing:rotating"),
+            (1e6, 1e7),
+            tuple(f"shaft.{p}" for p in _LADDER),
+        ),
+        EffectInfo(
+            "ball_skin_effect",
+            "RL ladder for the bearing balls / contact conduction",
+            "In the balls and at the Hertzian contact the conducting cross-section shrinks "
+            "with the skin depth, so the contact path is a frequency-dependent R-L rather "
+            "than a constant one.",
+            "Bearing voltage at standstill (metallic contact): ringing damping and its "
+            "high-frequency content.",
+            ("bearing.DE", "bearing.NDE"),
+            ("bearing:standstill",),
+            (1e6, 1e7),
+            tuple(f"ball.{p}" for p in _LADDER),
+        ),
+        EffectInfo(
+            "lubricant_dielectric_loss",
+            "third (series-RC) branch of the lubricant layer",
+            "The lubricant is a lossy dielectric: polarisation of the oil and additives "
+            "adds a relaxation branch, so the film capacitance falls with frequency.",
+            "Bearing voltage when rotating: BVR magnitude decreasing with frequency "
+            "between ~10 kHz and 1 MHz; plateau tilted.",
+            ("bearing.DE.lubricant", "bearing.NDE.lubricant"),
+            ("bearing:rotating",),
+            (1e4, 1e6),
+            ("lubricant.k_d", "lubricant.tau_d"),
+        ),
+        EffectInfo(
+            "lubricant_two_layer",
+            "base-oil film and thickener-rich layer in series (oil bleeding, layer separation)",
+            "Oil bleeding out of the grease thickener separates the film into a base-oil "
+            "layer and a thickener-rich layer of different permittivity and conductivity; "
+            "two RC layers in series give a second relaxation in the bearing impedance.",
+            "Bearing voltage when rotating: a step in the BVR magnitude (two plateaus) "
+            "between ~10 kHz and a few MHz that one RC layer cannot follow.",
+            ("bearing.DE.lubricant", "bearing.NDE.lubricant"),
+            ("bearing:rotating",),
+            (1e4, 3e6),
+            ("lubricant.R_2", "lubricant.C_2"),
+        ),
+        EffectInfo(
+            "hertzian_edge_capacitance",
+            "capacitor across the contact for lubricant/air at the edge of the Hertzian zone",
+            "Around the Hertzian contact the gap between ball and race widens slowly; the "
+            "lubricant and air there form a capacitance in parallel with the contact that "
+            "conducts even when the contact itself is shorted or the film is thick.",
+            "Bearing voltage: BVR level when rotating and the ringing frequency at "
+            "standstill.",
+            ("bearing.DE", "bearing.NDE"),
+            ("bearing:rotating", "bearing:standstill"),
+            (1e5, 1e7),
+            ("bearing.C_edge",),
+        ),
+        EffectInfo(
+            "metallic_contact",
+            "boundary-lubrication switch: metallic ball-race contact at standstill",
+            "At standstill the bearing runs in boundary lubrication: metallic contact "
+            "between balls and races shorts the film, so the shaft is held near frame "
+            "potential and only switching-induced ringing remains.",
+            "Bearing voltage at standstill: the model shows a square-wave film charging "
+            "(capacitive divider) where the data settle to ~0 between switching events.",
+            ("bearing.DE", "bearing.NDE"),
+            ("bearing:standstill",),
+            (0.0, 1e5),
+            (),
+        ),
+        EffectInfo(
+            "fixture_inductance",
+            "series lead/fixture inductance of the impedance measurement (outside the machine)",
+            "The leads and fixture of the impedance analyser add a series inductance to "
+            "every measured spectrum; it is not part of the machine.",
+            "All impedance spectra: an extra inductive rise proportional to f at the top "
+            "of the band (above the last resonance), the same in every topology.",
+            ("fixture",),
+            ("impedance:CM", "impedance:DM"),
+            (1e6, 1e7),
+            ("fixture.L",),
+        ),
+    )
+}
+
+ALL_EFFECTS: frozenset[str] = frozenset(get_args(Effect))
+PAPER_EFFECTS: frozenset[str] = ALL_EFFECTS - {"fixture_inductance"}
+"""The full grey-box model of the reference paper: every effect except the fixture."""
+
+
+def check_effects(effects: object, name: str = "effects") -> frozenset[str]:
+    """Frozen set of effect names; InputError naming ``name`` for an unknown one."""
+    if isinstance(effects, str):
+        effects = [effects]
+    try:
+        items = list(effects)  # type: ignore[call-overload]
+    except TypeError:
+        from vfmodel.errors import InputError
+
+        raise InputError(f"{name}: expected an iterable of effect names, got "
+                         f"{type(effects).__name__}") from None
+    for e in items:
+        check_choice(name, e, Effect)
+    return frozenset(items)
