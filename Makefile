@@ -9,7 +9,7 @@ PY     := $(VENV)/bin/python
 PIP    := $(PY) -m pip
 DEMO_OUT ?= demo-out
 
-.PHONY: demo test lint typecheck pytest ngspice clean
+.PHONY: demo test test-slow lint typecheck pytest ngspice clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -43,7 +43,11 @@ typecheck: $(VENV)/.installed-test
 	$(VENV)/bin/mypy
 
 pytest: $(VENV)/.installed-test ngspice
-	$(VENV)/bin/pytest -q -n 2 --durations=15
+	$(VENV)/bin/pytest -q -n 2 -m "not slow" --durations=15
+
+# long acceptance runs (minutes each); not part of `make test`
+test-slow: $(VENV)/.installed-test ngspice
+	$(VENV)/bin/pytest -q -n 2 -m slow --durations=15
 
 test: lint typecheck pytest
 

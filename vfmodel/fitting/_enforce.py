@@ -1,38 +1,51 @@
-"""Passivity enforcement by residue (and D) perturbation: the convex program.
+"""Passivity enforcement by residue (and D) perturbation: a cutting-plane quadratic program.
 
-For fixed poles the response is linear in the residues and D, and both passivity conditions
-are convex in H at a fixed frequency:
+For fixed poles the response is linear in the residues and D. The perturbation
+dH(s) = sum_b phi_b(s) X_b uses a real basis that keeps conjugate pairs conjugate:
+phi = 1/(s - p) for a real pole; 1/(s - p) + 1/(s - p*) and j/(s - p) - j/(s - p*) for the
+real and imaginary parts of the upper residue of a pair; phi = 1 for D.
 
-- Z, Y: the Hermitian part P = (H + H^H)/2 must be PSD; for an n-port we impose the real
-  symmetric embedding [[Re P, -Im P], [Im P, Re P]] >= eps I (same eigenvalues as P, twice);
-- S: ||H||_2 <= 1 - eps, i.e. [[I, R(H)], [R(H)^T, I]] >= 0 with R(H) = [[Re H, -Im H],
-  [Im H, Re H]] (same singular values as H).
+Passivity at one frequency is a convex condition on H that is the intersection of half
+spaces, one per unit vector (pair):
 
-The perturbation dH(s) = sum_k dR_k phi_k(s) + dD uses a real basis that keeps conjugate
-pairs conjugate: phi = 1/(s - p) for a real pole; 1/(s - p) + 1/(s - p*) and
-j/(s - p) - j/(s - p*) for the real and imaginary parts of the upper residue of a pair.
+- Z, Y: lambda_min((H + H^H)/2) >= 0  <=>  Re(v^H H v) >= 0 for every unit v;
+- S: sigma_max(H) <= 1  <=>  Re(u^H H v) <= 1 for every unit u, v.
+
+Each such half space, for a vector (pair) taken from the eigen- (singular value)
+decomposition of the current model at a violating frequency, is an exact linear
+constraint on the total perturbation (a cut). This is the linearised constraint of
+Gustavsen and Semlyen [1] and Gustavsen [2] (first-order eigenvalue / singular value
+perturbation), used here as a cutting plane [3]: every program starts from the original
+model with all cuts found so far, so the change is minimised for the final constraint
+set instead of accumulated step by step. The program is a QP (no semidefinite cones),
+which Clarabel solves quickly and reliably.
+
 The objective, the weighted change of H on the data frequencies, is the sum over entries
-(i, j) of ||W_ij Phi x_ij||^2 = ||R_ij x_ij||^2 where Phi = QR: R_ij is square, so the
-program size does not grow with the number of data frequencies.
+(i, j) of ||W_ij Phi x_ij||^2 = ||R_ij x_ij||^2 with Phi = QR (R_ij square), so the program
+size does not grow with the number of data frequencies. Variables are scaled by the
+largest basis magnitude on the data and by the response size, so they are O(1).
 
-The constraints are exact at the constraint frequencies; the program is re-solved from the
-original model with more constraint frequencies (cutting planes) until the Hamiltonian test
-finds no violation band.
+New violations are found on a dense frequency grid (cheap, vectorised) and, once the grid
+is clean, by the Hamiltonian test, whose band edges, interior points and worst point give
+further cuts; the loop ends when the Hamiltonian test certifies passivity.
 
 References
 ----------
 .. [1] B. Gustavsen, A. Semlyen, "Enforcing passivity for admittance matrices approximated by
-   rational functions", IEEE Trans. Power Syst. 16(1) (2001), doi:10.1109/59.910780.
-.. [2] C. P. Coelho, J. Phillips, L. M. Silveira, "A convex programming approach for generating
-   guaranteed passive approximations to tabulated frequency-data", IEEE Trans. CAD 23(2)
-   (2004), doi:10.1109/TCAD.2003.822107.
-.. [3] S. Grivet-Talocia, B. Gustavsen, "Passive Macromodeling", Wiley (2016),
+   rational functions", IEEE Trans. Power Syst. 16(1) (2001), doi:10.1109/59.910778.
+.. [2] B. Gustavsen, "Fast passivity enforcement for pole-residue models by perturbation of
+   residue matrix eigenvalues", IEEE Trans. Power Deliv. 23(4) (2008),
+   doi:10.1109/TPWRD.2007.915883.
+.. [3] J. E. Kelley, "The cutting-plane method for solving convex programs", J. SIAM 8(4)
+   (1960), doi:10.1137/0108053.
+.. [4] S. Grivet-Talocia, B. Gustavsen, "Passive Macromodeling", Wiley (2016),
    doi:10.1002/9781119140931.
 """
 
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -47,24 +60,22 @@ from vfmodel.fitting.passivity import PassivityReport, check_passivity
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
-_INTERIOR = 8  # constraint points inside each violation band
-# Objective forms (norm or its square) and Clarabel settings tried in turn until one ends
-# "optimal": tolerances a little looser
-# than the 1e-8 defaults, then variants that cure the stalls ("AlmostSolved") seen with the
-# structurally degenerate PSD constraints (the real embedding doubles every eigenvalue).
-# The result is certified by the Hamiltonian test, not by the solver.
-_TIKHONOV = 1e-4
-_TOL = {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}
+_INTERIOR = 8  # cut frequencies inside each band of the Hamiltonian test
+_MAX_NEW = 60  # new cut frequencies per program at most (from the grid)
+_NEAR = 1
+_ALL_BELOW = 0
+_COMBOS = False
+_GRID_LOG = 1500  # log-spaced grid points over the poles +- 2 decades
+# Tikhonov term relative to the objective's scale: keeps directions the data barely sees
+# (poles outside the data band) bounded and the program well conditioned
+_TIKHONOV = 1e-5
+# Objective forms and Clarabel settings tried in turn until one ends "optimal". The result
+# is certified by the Hamiltonian test, not by the solver.
 _ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
-    ("norm", _TOL),
-    ("norm", {**_TOL, "max_step_fraction": 0.95}),
     ("sumsq", {}),
-    ("norm", {**_TOL, "static_regularization_constant": 1e-7}),
-    ("sumsq", {**_TOL, "static_regularization_constant": 1e-7}),
-    ("norm", {**_TOL, "equilibrate_enable": False}),
-    # last resort: 1e-6 tolerances (the Hamiltonian test still certifies the result)
-    ("norm", {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-6}),
-    ("sumsq", {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-6}),
+    ("norm", {}),
+    ("sumsq", {"static_regularization_constant": 1e-7, "max_step_fraction": 0.95}),
+    ("norm", {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}),
 )
 
 
@@ -86,9 +97,7 @@ def _basis(poles: ComplexArray, s: NDArray[np.complexfloating], with_d: bool) ->
     return np.column_stack(cols) if cols else np.zeros((s.size, 0), complex)
 
 
-def _to_residues(
-    poles: ComplexArray, x: FloatArray, n: int
-) -> tuple[ComplexArray, FloatArray]:
+def _to_residues(poles: ComplexArray, x: FloatArray, n: int) -> tuple[ComplexArray, FloatArray]:
     """Residue and D perturbations from the real parameters x (n_b, n, n)."""
     dr = np.zeros((poles.size, n, n), complex)
     k = j = 0
@@ -104,44 +113,214 @@ def _to_residues(
     return dr, np.asarray(dd, dtype=float)
 
 
+@dataclass(frozen=True)
+class _Setup:
+    """Fixed data of the programs: the original model, scalings and objective blocks."""
+
+    model: RationalModel
+    perturb_d: bool
+    margin: float
+    h0: float  # response scale (1 for S)
+    col: FloatArray  # basis column scale (n_b,)
+    r_blocks: sparse.csr_matrix  # block-diagonal objective, entry (i, j) block = R_ij
+    size_floor: float  # floor of the per-frequency response size (Z, Y), units of h0
+    d_size: float  # size of the response at infinity (Z, Y), units of h0
+
+    @property
+    def n(self) -> int:
+        return self.model.n_in
+
+    @property
+    def n_b(self) -> int:
+        return int(self.col.size)
+
+    def phi(self, f_hz: FloatArray) -> ComplexArray:
+        """Scaled basis at frequencies in Hz; ``inf`` keeps the D column only."""
+        fin = np.isfinite(f_hz)
+        out = np.zeros((f_hz.size, self.n_b), complex)
+        out[fin] = _basis(self.model.poles, 2j * np.pi * f_hz[fin], self.perturb_d)
+        if self.perturb_d:
+            out[~fin, -1] = 1.0
+        return out / self.col
+
+    def apply(self, x: FloatArray) -> RationalModel:
+        """Model with the scaled parameters x (n * n * n_b,) added."""
+        n = self.n
+        xb = np.transpose(x.reshape(n, n, self.n_b), (2, 0, 1)) * (self.h0 / self.col)[
+            :, None, None
+        ]
+        dr, dd = _to_residues(self.model.poles, xb, n)
+        m = self.model
+        return RationalModel(m.poles, m.residues + dr, m.dd + dd, m.ee, m.kind, m.z0)
+
+
+def _response(model: RationalModel, f_hz: FloatArray) -> ComplexArray:
+    """H(j 2 pi f) without E (the E condition is separate); D at ``inf``."""
+    fin = np.isfinite(f_hz)
+    h = np.empty((f_hz.size, model.n_out, model.n_in), complex)
+    h[fin] = model.evaluate_s(2j * np.pi * f_hz[fin]) - (2j * np.pi * f_hz[fin])[
+        :, None, None
+    ] * model.ee[None]
+    h[~fin] = model.dd
+    return h
+
+
+def _margins(kind: str, h: ComplexArray) -> FloatArray:
+    """Margin per frequency: min eig (H + H^H)/2 (Z, Y) or 1 - sigma_max (S)."""
+    if kind == "S":
+        return np.asarray(1.0 - np.linalg.svd(h, compute_uv=False)[:, 0], dtype=float)
+    herm = 0.5 * (h + np.conj(np.swapaxes(h, 1, 2)))
+    return np.asarray(np.linalg.eigvalsh(herm)[:, 0], dtype=float)
+
+
+def _pairs(left: ComplexArray, right: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    """Unit vector pairs for the cuts: the given columns and, when ``_COMBOS``, the mixtures
+    (a_i + w a_j) / sqrt 2, w in {1, -1, j, -j}, of every two of them (a polyhedral
+    approximation of the low subspace; cuts of the eigenvectors alone rotate slowly)."""
+    if not _COMBOS or left.shape[1] < 2:
+        return left, right
+    cols_l, cols_r = [left], [right]
+    for i in range(left.shape[1]):
+        for j in range(i + 1, left.shape[1]):
+            for w in (1.0, -1.0, 1j, -1j):
+                cols_l.append(((left[:, i] + w * left[:, j]) / np.sqrt(2))[:, None])
+                cols_r.append(((right[:, i] + w * right[:, j]) / np.sqrt(2))[:, None])
+    return np.hstack(cols_l), np.hstack(cols_r)
+
+
+def _cuts(
+    setup: _Setup, current: RationalModel, f_hz: FloatArray, h_orig: ComplexArray
+) -> tuple[FloatArray, FloatArray]:
+    """Cuts ``A x >= b`` at frequencies ``f_hz`` from the current model's vectors.
+
+    Z, Y: Re(v^H (H0 + dH) v) >= margin * size for the eigenvectors v of the Hermitian part
+    of the current model with eigenvalue below 10 margin * size (size = ||H0||_2 floored);
+    S: Re(u^H (H0 + dH) v) <= 1 - margin for the singular pairs with sigma above
+    1 - 10 margin. Every row is divided by the size, so all rows are O(1).
+    """
+    n, h0 = setup.n, setup.h0
+    h_cur = _response(current, f_hz) / h0
+    h_orig = h_orig / h0
+    phi = setup.phi(f_hz)
+    s_kind = setup.model.kind == "S"
+    if s_kind:
+        u, sv, vh = np.linalg.svd(h_cur)
+        v_all = np.conj(np.swapaxes(vh, 1, 2))
+        low = sv > 1.0 - 10 * setup.margin
+        size = np.ones(f_hz.size)
+    else:
+        herm = 0.5 * (h_cur + np.conj(np.swapaxes(h_cur, 1, 2)))
+        lam, u = np.linalg.eigh(herm)
+        v_all = u
+        size = np.maximum(np.linalg.norm(h_orig, 2, axis=(1, 2)), setup.size_floor)
+        low = lam < 10 * setup.margin * size[:, None]
+    rows: list[FloatArray] = []
+    rhs: list[FloatArray] = []
+    for k in np.flatnonzero(np.any(low, axis=1)):
+        a, b = _pairs(u[k][:, low[k]], v_all[k][:, low[k]])
+        # Re(a^H dH b) = sum_ij Re(conj(a_i) b_j dH_ij), dH_ij = phi @ x_ij
+        c = np.conj(a)[:, None, :] * b[None, :, :]  # (n, n, n_vec)
+        row = np.real(c[:, :, :, None] * phi[k][None, None, None, :])
+        row = np.moveaxis(row, 2, 0).reshape(a.shape[1], -1)
+        lhs0 = np.real(np.einsum("iv,ij,jv->v", np.conj(a), h_orig[k], b))
+        if s_kind:  # Re(a^H (H0 + dH) b) <= 1 - margin
+            rows.append(-row)
+            rhs.append(-(1.0 - setup.margin - lhs0))
+        else:  # Re(a^H (H0 + dH) a) >= margin * size
+            rows.append(row / size[k])
+            rhs.append((setup.margin * size[k] - lhs0) / size[k])
+    if not rows:
+        return np.zeros((0, n * n * setup.n_b)), np.zeros(0)
+    return np.vstack(rows), np.concatenate(rhs)
+
+
 def _band_points(bands: tuple[tuple[float, float], ...], worst: float | None) -> FloatArray:
-    """Constraint frequencies (Hz) for violation bands: edges, interior, just outside."""
+    """Cut frequencies (Hz) for violation bands: edges, interior, worst point, infinity."""
     pts: list[float] = []
     for lo, hi in bands:
         if not np.isfinite(hi):
-            top = max(lo, 1.0) * 1e3
-            pts += list(np.logspace(np.log10(max(lo, 1.0)), np.log10(top), 3 * _INTERIOR))
+            base = max(lo, 1e-3)
+            pts += list(np.logspace(np.log10(base), np.log10(base * 1e3), 3 * _INTERIOR))
             continue
         a = lo if lo > 0 else hi * 1e-3
-        # at least _INTERIOR points, and 8 per decade in broad bands
         count = max(_INTERIOR, int(8 * np.log10(hi / a))) + 2
         pts += list(np.logspace(np.log10(a), np.log10(hi), count))
-        pts += [hi * 1.02] + ([lo * 0.98] if lo > 0 else [0.0])
+        if lo == 0:
+            pts.append(0.0)
     if worst is not None and np.isfinite(worst):
         pts.append(worst)
     return np.asarray(pts, dtype=float)
 
 
-def _embed(kind: str, hr: FloatArray, hi: FloatArray) -> FloatArray:
-    """Real symmetric matrix, linear in (Re H, Im H), whose PSD-ness (plus an offset) is the
-    passivity condition: Z, Y: [[Pr, -Pi], [Pi, Pr]] with P = (H + H^H)/2; S: the off-diagonal
-    blocks of [[I, R], [R^T, I]] with R = [[Re H, -Im H], [Im H, Re H]]."""
-    if kind == "S":
-        r = np.block([[hr, -hi], [hi, hr]])
-        z = np.zeros_like(r)
-        return np.block([[z, r], [r.T, z]])
-    pr = 0.5 * (hr + hr.T)
-    pi = 0.5 * (hi - hi.T)
-    return np.block([[pr, -pi], [pi, pr]])
+def _grid(model: RationalModel, f_data: FloatArray) -> FloatArray:
+    """Dense check grid (Hz): data, log grid over the poles, resonances, 0 and infinity."""
+    mags = np.abs(model.poles[np.abs(model.poles) > 0]) / (2 * np.pi)
+    lo, hi = (mags.min(), mags.max()) if mags.size else (1.0, 1.0)
+    pos = f_data[f_data > 0]
+    if pos.size:
+        lo, hi = min(lo, pos.min()), max(hi, pos.max())
+    parts = [f_data, np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, _GRID_LOG), [0.0]]
+    for p in model.poles[model.poles.imag > 0]:
+        parts.append((p.imag + abs(p.real) * np.linspace(-4, 4, 17)) / (2 * np.pi))
+    g = np.unique(np.concatenate(parts))
+    return g[g >= 0]
 
 
-def _dedupe(f_hz: FloatArray, rel: float = 1e-7) -> FloatArray:
-    """Sorted frequencies without near-duplicates (which make the program degenerate)."""
-    f = np.unique(f_hz)
-    if f.size < 2:
-        return f
-    keep = np.concatenate([[True], np.diff(f) > rel * f[1:]])
-    return f[keep]
+def _pick(f: FloatArray, m: FloatArray, bad: NDArray[np.bool_]) -> FloatArray:
+    """Cut frequencies among the bad grid points: the local minima of the margin (the
+    worst first, at most ``_MAX_NEW``), their grid neighbours and the edges of every bad
+    run (the next violations of a cutting-plane iterate appear next to its cuts)."""
+    idx = np.flatnonzero(bad)
+    if idx.size <= _ALL_BELOW:
+        return np.asarray(f[idx], dtype=float)
+    left = np.concatenate([[np.inf], m[:-1]])
+    right = np.concatenate([m[1:], [np.inf]])
+    minima = idx[(m[idx] <= left[idx]) & (m[idx] <= right[idx])]
+    minima = minima[np.argsort(m[minima])][:_MAX_NEW]
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    edges = np.array([r[k] for r in runs for k in (0, -1)], dtype=int)[: 2 * _MAX_NEW]
+    near = (minima[:, None] + np.arange(-_NEAR, _NEAR + 1)[None, :]).ravel()
+    pick = np.union1d(np.union1d(minima, edges), near[(near >= 0) & (near < f.size)])
+    return np.asarray(f[pick], dtype=float)
+
+
+def _objective(
+    setup_model: RationalModel,
+    f: FloatArray,
+    h_data: ComplexArray,
+    weighting: str,
+    perturb_d: bool,
+    h0: float,
+) -> tuple[FloatArray, sparse.csr_matrix]:
+    """Column scale and the block-diagonal QR-reduced objective (see module docstring)."""
+    n = setup_model.n_in
+    if weighting == "relative":
+        mag = np.abs(h_data)
+        floor = 1e-3 * np.max(mag, axis=(1, 2), keepdims=True)
+        wts = 1.0 / np.maximum(mag, np.maximum(floor, 1e-300))
+    else:
+        wts = np.full(h_data.shape, 1.0 / h0)
+    wts = wts / np.sqrt(f.size)
+    phi_d = _basis(setup_model.poles, 2j * np.pi * f, perturb_d)
+    col = np.max(np.abs(phi_d), axis=0)
+    col = np.where(col > 0, col, 1.0)
+    phi_d = phi_d / col
+    n_b = phi_d.shape[1]
+    blocks: list[FloatArray] = []
+    cache: dict[bytes, FloatArray] = {}
+    for i in range(n):
+        for j in range(n):
+            w_ij = wts[:, i, j] * h0
+            key = w_ij.tobytes()
+            if key not in cache:
+                a = w_ij[:, None] * phi_d
+                a_ri = np.vstack([a.real, a.imag])
+                reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(n_b)
+                cache[key] = np.asarray(
+                    np.linalg.qr(np.vstack([a_ri, reg]), mode="r"), dtype=float
+                )
+            blocks.append(cache[key])
+    return col, sparse.block_diag(blocks, format="csr")
 
 
 def enforce(
@@ -160,6 +339,8 @@ def enforce(
         )
     if max_iter < 1:
         raise InputError("max_iter must be >= 1", found=str(max_iter))
+    if not 0 < margin < 0.1:
+        raise InputError("margin must be in (0, 0.1)", found=str(margin))
     first = check_passivity(model, method="hamiltonian")
     if not first.stable:
         raise PassivityError(
@@ -179,6 +360,10 @@ def enforce(
         first = check_passivity(model, method="hamiltonian")
     if first.passive:
         return model, first
+    if not perturb_d and first.d_margin < 0:
+        raise PassivityError(
+            "D violates the asymptotic passivity condition and perturb_d is False"
+        )
 
     n = model.n_in
     if data is None:
@@ -198,45 +383,43 @@ def enforce(
                 expected=f"{n}x{n}",
             )
         f, h_data = data.freq_hz, data.values
-    s_data = 2j * np.pi * f
     h0 = 1.0 if model.kind == "S" else float(np.sqrt(np.mean(np.abs(h_data) ** 2)))
     h0 = h0 if h0 > 0 else 1.0
+    col, r_blocks = _objective(model, f, h_data, weighting, perturb_d, h0)
 
-    # weights (n_f, n, n) and the QR-reduced objective per entry
-    if weighting == "relative":
-        mag = np.abs(h_data)
-        floor = 1e-3 * np.max(mag, axis=(1, 2), keepdims=True)
-        wts = 1.0 / np.maximum(mag, np.maximum(floor, 1e-300))
-    else:
-        wts = np.full(h_data.shape, 1.0 / h0)
-    wts = wts / np.sqrt(f.size)
-    phi_d = _basis(model.poles, s_data, perturb_d)
-    col = np.max(np.abs(phi_d), axis=0)  # column scaling: x in units of the response
-    col = np.where(col > 0, col, 1.0)
-    phi_d = phi_d / col
-    n_b = phi_d.shape[1]
-    r_mats: list[FloatArray] = []
-    for i in range(n):
-        for j in range(n):
-            a = wts[:, i, j, None] * phi_d * h0
-            # small Tikhonov term: keeps directions the data barely sees (poles outside
-            # the data band) from taking huge values and the program well conditioned
-            a_ri = np.vstack([a.real, a.imag])
-            reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(n_b)
-            r_mats.append(np.asarray(np.linalg.qr(np.vstack([a_ri, reg]), mode="r"), dtype=float))
+    grid = _grid(model, f)
+    h_grid = _response(model, grid)
+    size_floor = 1e-3 * float(np.max(np.linalg.norm(h_grid, 2, axis=(1, 2)))) / h0
+    d_size = max(float(np.linalg.norm(model.dd, 2)) / h0, size_floor)
+    setup = _Setup(model, perturb_d, margin, h0, col, r_blocks, size_floor, d_size)
+    size = (
+        np.ones(grid.size)
+        if model.kind == "S"
+        else np.maximum(np.linalg.norm(h_grid / h0, 2, axis=(1, 2)), size_floor)
+    )
 
     h_model_data = model(f)
-    cons_hz = _dedupe(_band_points(first.bands_hz, first.worst_freq_hz))
+    current = model
+    a_all = np.zeros((0, n * n * setup.n_b))
+    b_all = np.zeros(0)
+    m0 = _margins(model.kind, h_grid / h0) / size
+    cut_f = np.concatenate([_band_points(first.bands_hz, first.worst_freq_hz), _pick(grid, m0, m0 < 0)])
     report = first
     for it in range(1, max_iter + 1):
-        x_val = _solve(model, cons_hz, r_mats, col, h0, n_b, perturb_d, margin)
-        dr, dd = _to_residues(model.poles, x_val * h0 / col[:, None, None], n)
-        new = RationalModel(
-            model.poles, model.residues + dr, model.dd + dd, e, model.kind, model.z0
-        )
-        report = check_passivity(new, method="hamiltonian")
+        cut_f = np.unique(cut_f)
+        a_new, b_new = _cuts(setup, current, cut_f, _response(model, cut_f))
+        a_all, b_all = np.vstack([a_all, a_new]), np.concatenate([b_all, b_new])
+        x_val = _solve(setup, a_all, b_all)
+        current = setup.apply(x_val)
+        # cheap screen on the dense grid first; the Hamiltonian test certifies
+        m_grid = _margins(model.kind, _response(current, grid) / h0) / size
+        bad = m_grid < 0
+        if np.any(bad):
+            cut_f = _pick(grid, m_grid, bad)
+            continue
+        report = check_passivity(current, method="hamiltonian")
         if report.passive:
-            dh = new(f) - h_model_data
+            dh = current(f) - h_model_data
             rms = float(np.sqrt(np.mean(np.abs(dh) ** 2)))
             rel = float(np.linalg.norm(dh)) / max(float(np.linalg.norm(h_data)), 1e-300)
             final = PassivityReport(
@@ -248,9 +431,17 @@ def enforce(
                     "notes": tuple(notes) + report.notes,
                 }
             )
-            return new, final
-        extra = _band_points(report.bands_hz, report.worst_freq_hz)
-        cons_hz = _dedupe(np.concatenate([cons_hz, extra]))
+            return current, final
+        cut_f = _band_points(report.bands_hz, report.worst_freq_hz)
+        grid = np.union1d(grid, cut_f[np.isfinite(cut_f)])
+        h_grid = _response(model, grid)
+        size = (
+            np.ones(grid.size)
+            if model.kind == "S"
+            else np.maximum(np.linalg.norm(h_grid / h0, 2, axis=(1, 2)), size_floor)
+        )
+    if report is first or report.passive:
+        report = check_passivity(current, method="hamiltonian")
     raise PassivityError(
         f"passivity not certified after {max_iter} convex programs; last violation "
         f"{report.worst_violation:.3g} in bands {report.bands_hz[:3]} Hz; "
@@ -258,89 +449,31 @@ def enforce(
     )
 
 
-def _solve(
-    model: RationalModel,
-    cons_hz: FloatArray,
-    r_mats: list[FloatArray],
-    col: FloatArray,
-    h0: float,
-    n_b: int,
-    perturb_d: bool,
-    margin: float,
-) -> FloatArray:
-    """One convex program; returns the scaled parameters x (n_b, n, n)."""
+def _solve(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
+    """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x."""
     import cvxpy
-    n = model.n_in
-    x = cvxpy.Variable((n_b, n * n))
-    xv = cvxpy.vec(x, order="F")  # index b + n_b * (i * n + j)
-    # minimise the 2-norm (same minimiser as its square; a second-order cone is better
-    # conditioned for the interior-point solver than a quadratic objective)
-    objective = cvxpy.norm(sparse.block_diag(r_mats, format="csr") @ xv, 2)
-    s_c = 2j * np.pi * cons_hz
-    phi_c = _basis(model.poles, s_c, perturb_d) / col
-    h_c = (model.evaluate_s(s_c) - s_c[:, None, None] * model.ee[None]) / h0
-    n_c = cons_hz.size
-    cons = []
-    if n == 1 and model.kind != "S":
-        # Re(h + dh) >= margin |h|, all frequencies at once
-        size = np.maximum(np.abs(h_c[:, 0, 0]), 1e-300)
-        cons.append((phi_c.real / size[:, None]) @ xv >= margin - h_c[:, 0, 0].real / size)
-    elif n == 1:
-        # |h + dh| <= 1 - margin: one second-order cone per frequency
-        re = h_c[:, 0, 0].real + phi_c.real @ xv
-        im = h_c[:, 0, 0].imag + phi_c.imag @ xv
-        cons.append(
-            cvxpy.SOC(np.full(n_c, 1.0 - margin), cvxpy.vstack([re, im]), axis=0)
-        )
-    else:
-        # PSD matrix at frequency k: const_k + G_k @ xv, G_k = kron(patterns, phi_k) (the
-        # embedding is linear in (Re H, Im H); unit perturbations give the patterns)
-        m = _embed(model.kind, np.zeros((n, n)), np.zeros((n, n))).shape[0]
-        units = np.eye(n * n).reshape(n * n, n, n)
-        zero = np.zeros((n, n))
-        pat_r = np.column_stack([_embed(model.kind, u, zero).ravel(order="F") for u in units])
-        pat_i = np.column_stack([_embed(model.kind, zero, u).ravel(order="F") for u in units])
-        if model.kind == "S":
-            offset = (1.0 - margin) * np.eye(m)
-            size = np.ones(n_c)
-        else:
-            offset = -margin * np.eye(m)
-            # each frequency's condition is divided by |H| there (PSD is invariant under
-            # positive scaling), so all constraints are O(1) for impedances over decades
-            size = np.maximum(np.linalg.norm(h_c, 2, axis=(1, 2)), 1e-300)
-        consts = np.concatenate(
-            [
-                (_embed(model.kind, h_c[k].real, h_c[k].imag) / size[k] + offset).ravel(
-                    order="F"
-                )
-                for k in range(n_c)
-            ]
-        )
-        g = sparse.vstack(
-            [
-                sparse.kron(pat_r, phi_c[k].real[None] / size[k])
-                + sparse.kron(pat_i, phi_c[k].imag[None] / size[k])
-                for k in range(n_c)
-            ],
-            format="csr",
-        )
-        mats = consts + g @ xv
-        mm = m * m
-        for k in range(n_c):
-            cons.append(cvxpy.reshape(mats[k * mm : (k + 1) * mm], (m, m), order="F") >> 0)
-    if perturb_d:
-        d_new = model.dd / h0 + cvxpy.reshape(x[n_b - 1], (n, n), order="C")
-        if model.kind == "S":
-            cons.append(cvxpy.sigma_max(d_new) <= 1.0 - margin)
+
+    x = cvxpy.Variable(a.shape[1])
+    resid = setup.r_blocks @ x
+    cons: list[Any] = [a @ x >= b]
+    if setup.perturb_d:
+        # asymptotic condition, exact (a cutting plane converges slowly on the PSD cone of a
+        # nearly singular D): D is the last basis column of every entry
+        n, m = setup.n, setup.model
+        last = np.arange(setup.n_b - 1, a.shape[1], setup.n_b)
+        d_new = m.dd / setup.h0 + cvxpy.reshape(x[last], (n, n), order="C") / setup.col[-1]
+        if m.kind == "S":
+            cons.append(cvxpy.sigma_max(d_new) <= 1.0 - setup.margin)
         elif n == 1:
-            cons.append(d_new[0, 0] >= 0)
+            cons.append(d_new >= setup.margin * setup.d_size)
         else:
-            cons.append(0.5 * (d_new + d_new.T) >> 0)
+            sym = 0.5 * (d_new + d_new.T)
+            cons.append(sym - setup.margin * setup.d_size * np.eye(n) >> 0)
     statuses: list[str] = []
     problems: dict[str, Any] = {}
     for form, settings in _ATTEMPTS:
         if form not in problems:
-            obj = objective if form == "norm" else cvxpy.sum_squares(objective.args[0])
+            obj = cvxpy.sum_squares(resid) if form == "sumsq" else cvxpy.norm(resid, 2)
             problems[form] = cvxpy.Problem(cvxpy.Minimize(obj), cons)
         prob = problems[form]
         try:
@@ -353,10 +486,8 @@ def _solve(
             continue
         statuses.append(str(prob.status))
         if prob.status == cvxpy.OPTIMAL and x.value is not None:
-            break
-    else:
-        raise SolverError(
-            f"passivity program did not end with status 'optimal' (got {statuses}); "
-            f"{cons_hz.size} constraint frequencies, {n_b * n * n} unknowns"
-        )
-    return np.asarray(x.value, dtype=float).reshape(n_b, n, n)
+            return np.asarray(x.value, dtype=float)
+    raise SolverError(
+        f"passivity program did not end with status 'optimal' (got {statuses}); "
+        f"{b.size} constraints, {a.shape[1]} unknowns"
+    )

@@ -44,9 +44,11 @@ HamiltonianForm = Literal["standard", "pencil"]
 
 # relative size of |Re(lambda)| below which an eigenvalue counts as purely imaginary; a
 # spurious candidate only splits an interval that the classification step merges again
-_IMAG_TOL = 1e-6
-# D_p is treated as singular below this reciprocal condition number
-_RCOND_SINGULAR = 1e-9
+_IMAG_TOL = 1e-4
+# D_p is treated as singular when its smallest singular value is below this, relative to
+# max(1, sigma_max(D_p)) (the scaled response is O(1)); the standard form loses accuracy
+# as 1/sigma_min(D_p) and missed narrow bands of nearly singular D + D^T at 1e-9
+_RCOND_SINGULAR = 1e-5
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,14 @@
 """Automatic order selection for vector fitting: grow where the error is largest, prune
-spurious poles, stop at the estimated noise floor or when adding poles stops paying.
+spurious poles, stop at the estimated noise floor or when adding poles stops paying, then
+reduce the order as far as the error bound allows.
+
+Growth: from one real pole and two pairs, each step adds about 40 % more poles (pairs at
+the largest local maxima of the weighted error) and runs one warm-started relocation.
+Order reduction: backward elimination with the poles fixed, ranked by the exact increase
+of the least-squares error when a pole is removed and the residues re-solved (the
+partial-F statistic; N. R. Draper, H. Smith, "Applied Regression Analysis", 3rd ed.,
+Wiley 1998, section 15.2), then trials of one pole less that are re-seeded (lightly
+damped pairs at the learned frequencies, Gustavsen & Semlyen 1999) and relocated.
 
 Noise floor: the k-th finite difference along frequency of white noise of standard
 deviation sigma has variance C(2k, k) sigma^2, while a smooth response contributes little
@@ -13,6 +22,8 @@ T. Gasser, L. Sroka, C. Jennen-Steinmetz, "Residual variance and residual patter
 nonlinear regression", Biometrika 73(3), 1986. doi:10.1093/biomet/73.3.625
 B. Gustavsen, "Improving the pole relocating properties of vector fitting", IEEE Trans.
 Power Delivery 21(3), 2006. doi:10.1109/TPWRD.2005.860281
+B. Gustavsen, A. Semlyen, "Rational approximation of frequency domain responses by vector
+fitting", IEEE Trans. Power Delivery 14(3), 1999. doi:10.1109/61.772353
 """
 
 from __future__ import annotations
@@ -28,10 +39,17 @@ from vfmodel.fitting import _vf_core as core
 
 _NOISE_MARGIN = 1.25  # stop when the weighted error is within this factor of the floor
 _MIN_GAIN = 0.10  # a growth step that gains less than 10 % marks the plateau
-_GROW_ITERATIONS = 4  # pole relocations per growth step (warm started)
+_GROW_ITERATIONS = 1  # pole relocations per growth step (warm started)
 _GROW_TOL = 0.02  # relative error change that ends a growth step early
+_GROWTH = 0.4  # a growth step adds about this fraction of the order (pairs at error peaks)
+_START_ORDER = 5  # one real pole and two pairs
 _DROP_FRACTION = 0.1  # a pole pair contributing < 10 % of the noise RMS is spurious
 _EXACT = 1e-11  # relative error treated as an exact fit when no noise is measurable
+_RESIDUAL_CHECK = 4.0  # refine the noise floor from the residual within this factor of it
+_REDUCE_TRIALS = 2  # one-pole-less trials after pruning (each continues only on success)
+_SEED_DAMPING = 0.03  # damping ratio of re-seeded pairs
+_TRIAL_TOL = 0.01  # relative error change that ends a trial
+_FINAL_PATIENCE = 2  # relocations without improvement that end a trial or the final fit
 _WINDOW = 11  # samples of the local median of the noise estimator
 
 
@@ -54,17 +72,19 @@ def estimate_noise(prob: core.Problem) -> float:
     too few points to tell.
     """
     wh = prob.wh
-    x = np.concatenate([wh.real, wh.imag], axis=1)  # (K, 2M)
+    xt = np.concatenate([wh.real.T, wh.imag.T], axis=0)  # (2M, K)
     ref = float(np.sqrt(np.mean(np.abs(wh) ** 2)))
     if ref == 0.0:
         return 0.0
     best = np.inf
     for k in (2, 3, 4):
-        if x.shape[0] - k < _WINDOW:
+        if xt.shape[1] - k < _WINDOW:
             continue
-        d = np.abs(np.diff(x, n=k, axis=0)) / np.sqrt(comb(2 * k, k))
-        med = np.median(sliding_window_view(d, _WINDOW, axis=0), axis=-1)
-        sigma = 1.4826 * med  # (K-k-W+1, 2M) per-component standard deviation
+        d = np.abs(np.diff(xt, n=k, axis=1)) / np.sqrt(comb(2 * k, k))  # (2M, K-k)
+        # running median over _WINDOW (odd) samples: middle element of each window
+        win = sliding_window_view(d, _WINDOW, axis=1)
+        med = np.partition(win, _WINDOW // 2, axis=-1)[..., _WINDOW // 2]
+        sigma = 1.4826 * med  # (2M, K-k-W+1) per-component standard deviation
         best = min(best, float(np.mean(sigma**2)))
     if not np.isfinite(best):
         return 0.0
@@ -112,44 +132,47 @@ def _residual_noise(prob: core.Problem, coef: core.Coefficients) -> float:
     return estimate_noise(rp) * scale
 
 
-def _greedy_prune(
-    prob: core.Problem, coef: core.Coefficients, limit: float, max_trials: int = 60
+def _backward_prune(
+    prob: core.Problem, coef: core.Coefficients, limit: float
 ) -> core.Coefficients:
-    """Remove the weakest poles one at a time while the error stays below ``limit``."""
-    trials = 0
-    while coef.reps.size > 1 and trials < max_trials:
-        contrib = core.pole_contributions(prob, coef)
-        improved = False
-        for j in np.argsort(contrib)[:8]:
-            trials += 1
-            keep = np.ones(coef.reps.size, bool)
-            keep[j] = False
-            cand = core.solve_residues(prob, coef.reps[keep])
-            if core.weighted_rel_rms(prob, core.evaluate(prob, cand)) <= limit:
-                coef, improved = cand, True
-                break
-        if not improved:
+    """Backward elimination with the poles fixed: remove the representative whose
+    removal costs least per pole (exact re-solved error, :func:`_vf_core.removal_costs`)
+    while the weighted relative error stays within ``limit``."""
+    den2 = float(np.linalg.norm(prob.wh)) ** 2
+    reps = coef.reps
+    sse = core.weighted_rel_rms(prob, core.evaluate(prob, coef)) ** 2 * den2
+    removed = False
+    while reps.size > 1:
+        cost = core.removal_costs(prob, reps)
+        # the order counts both poles of a pair: rank by the cost per pole removed
+        j = int(np.argmin(cost / np.where(reps.imag == 0, 1.0, 2.0)))
+        if sse + cost[j] > limit**2 * den2:
             break
-    return coef
+        sse += float(cost[j])
+        reps = np.delete(reps, j)
+        removed = True
+    return core.solve_residues(prob, reps) if removed else coef
 
 
-def _drop_and_relocate(
-    prob: core.Problem, coef: core.Coefficients, stable: bool
-) -> tuple[core.Coefficients, float] | None:
-    """Remove the weakest representative and run a few fast relocations."""
-    if coef.reps.size <= 1:
-        return None
-    keep = np.ones(coef.reps.size, bool)
-    keep[int(np.argmin(core.pole_contributions(prob, coef)))] = False
-    res = core.iterate(
-        prob,
-        coef.reps[keep],
-        max_iterations=_GROW_ITERATIONS,
-        tol=_GROW_TOL,
-        stable=stable,
-        precise=False,
-    )
-    return res.coef, res.weighted_rel_rms
+def _reseed(reps: NDArray[np.complex128], w_lo: float) -> NDArray[np.complex128]:
+    """Starting poles at the frequencies of ``reps``: pairs get the light damping of
+    fresh starting poles (Gustavsen & Semlyen 1999), real poles stay."""
+    real = reps[reps.imag == 0]
+    beta = np.maximum(reps[reps.imag != 0].imag, w_lo)
+    return core.sort_reps(np.concatenate([real, -_SEED_DAMPING * beta + 1j * beta]))
+
+
+def _one_pole_less(
+    prob: core.Problem, reps: NDArray[np.complex128], w_lo: float
+) -> NDArray[np.complex128]:
+    """Poles of one order less: the representative cheapest to remove per pole is
+    dropped; a dropped pair is replaced by one real pole at the lower band edge."""
+    cost = core.removal_costs(prob, reps) / np.where(reps.imag == 0, 1.0, 2.0)
+    j = int(np.argmin(cost))
+    rest = np.delete(reps, j)
+    if reps[j].imag != 0:
+        rest = np.concatenate([rest, [complex(-w_lo)]])
+    return core.sort_reps(rest)
 
 
 def auto_order(
@@ -165,21 +188,23 @@ def auto_order(
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
-    Each growth step adds about a quarter more pole pairs at the largest local maxima of
-    the weighted error and runs a few pole relocations from the current poles (warm
-    start). The floor is the smaller of the noise estimate (from the data and from the
-    roughness of the residual) and, when the error stops improving (a step gains less
-    than 10 %), the best error reached. The chosen model is the smallest tried order within
-    25 % of the floor; its weakest poles are then removed while the error stays within
-    that bound, and the pole relocation is run to convergence.
+    Each growth step adds about 40 % more poles (pairs at the largest local maxima of the
+    weighted error) and runs one pole relocation from the current poles (warm start). The
+    floor is the smaller of the noise estimate (from the data and, near the floor, from
+    the roughness of the residual) and, when the error stops improving (a step gains less
+    than 10 %), the best error reached. The chosen model is the smallest tried order
+    within 25 % of the floor. Poles are then removed by backward elimination while the
+    error stays within that bound; trials of one pole less (re-seeded, relocated) continue
+    while they stay within it. The model kept is relocated to convergence unless it came
+    from a converged trial.
     """
     noise = estimate_noise(prob)
     data_rms = float(np.sqrt(np.mean(np.abs(prob.wh) ** 2)))
-    reps = core.starting_poles(min(max_order, 4), w_lo, w_hi, spacing)
+    reps = core.starting_poles(min(max_order, _START_ORDER), w_lo, w_hi, spacing)
     history: list[core.IterationRecord] = []
     tried: list[tuple[int, float, core.Coefficients]] = []
     n_it = 0
-    best_err = np.inf
+    best_err = err_last = np.inf
     why = ""
     stall = n_gain = 0
     while True:
@@ -189,15 +214,17 @@ def auto_order(
             max_iterations=_GROW_ITERATIONS,
             tol=_GROW_TOL,
             stable=stable,
-            precise=False,
+            precise=None,
+            err_hint=err_last,
         )
         n_it += res.n_iterations
         history.extend(res.history)
         coef = _prune(prob, res.coef, _DROP_FRACTION * noise * data_rms)
-        err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
+        err = err_last = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         n = core.n_poles(coef.reps)
         tried.append((n, err, coef))
-        noise = min(noise, _residual_noise(prob, coef))
+        if err <= _RESIDUAL_CHECK * _NOISE_MARGIN * noise:  # near the floor: refine it
+            noise = min(noise, _residual_noise(prob, coef))
         if err <= _NOISE_MARGIN * max(noise, _EXACT / _NOISE_MARGIN):
             why = "noise"
             break
@@ -212,7 +239,7 @@ def auto_order(
         if n >= max_order:
             why = "max"
             break
-        n_pairs = max(1, min((n + 3) // 8, (max_order - n) // 2))
+        n_pairs = max(1, min(int(_GROWTH * n / 2 + 0.5), (max_order - n) // 2))
         if max_order - n < 2:
             new = np.array([-w_hi], dtype=complex)
         else:
@@ -226,26 +253,43 @@ def auto_order(
     if pick is None:  # only when the maximum order stopped the growth
         pick = min(tried, key=lambda t: (t[1], t[0]))
         limit = pick[1]
-    coef = pick[2]
+    coef = _backward_prune(prob, pick[2], limit)
     converged = False
-    for round_ in range(6):  # prune, relocate, until nothing more can be removed
-        pruned = _greedy_prune(prob, coef, limit)
-        if round_ > 0 and pruned.reps.size == coef.reps.size:
-            # nothing removable with the poles fixed: drop the weakest pole and let the
-            # others move (a few fast relocations) before giving up
-            trial = _drop_and_relocate(prob, coef, stable)
-            n_it += _GROW_ITERATIONS
-            if trial is None or trial[1] > limit:
-                break
-            pruned = trial[0]
+    for _ in range(_REDUCE_TRIALS):  # one pole less, re-seeded and relocated
+        if coef.reps.size <= 1:
+            break
+        trial = core.iterate(
+            prob,
+            _reseed(_one_pole_less(prob, coef.reps, w_lo), w_lo),
+            max_iterations=max_iterations,
+            tol=_TRIAL_TOL,
+            stable=stable,
+            precise=None,
+            patience=_FINAL_PATIENCE,
+            target=limit,
+        )
+        n_it += trial.n_iterations
+        history.extend(trial.history)
+        if trial.weighted_rel_rms > limit:
+            break
+        coef, converged = _backward_prune(prob, trial.coef, limit), trial.converged
+    if not converged:  # no lower order was accepted: relocate the pruned model
+        now = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         final = core.iterate(
-            prob, pruned.reps, max_iterations=max_iterations, tol=tol, stable=stable
+            prob,
+            coef.reps,
+            max_iterations=max_iterations,
+            tol=tol,
+            stable=stable,
+            precise=None,
+            patience=_FINAL_PATIENCE,
+            err_hint=now,
         )
         n_it += final.n_iterations
         history.extend(final.history)
         converged = final.converged
-        now = core.weighted_rel_rms(prob, core.evaluate(prob, pruned))
-        coef = final.coef if final.weighted_rel_rms <= max(limit, now) else pruned
+        if final.weighted_rel_rms <= max(limit, now):
+            coef = final.coef
     err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
     n = core.n_poles(coef.reps)
     if why == "noise":

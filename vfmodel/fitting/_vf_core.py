@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
@@ -37,6 +38,8 @@ ComplexArray = NDArray[np.complex128]
 
 _TINY = 1e-300
 _EXACT_FIT = 1e-12  # weighted relative RMS error below which the data is matched exactly
+_GRAM_ERROR = 1e-4  # weighted error above which the Gram sigma rows are accurate enough
+_RANK_TOL = 1e-13  # |R_jj| / max |R_ii| below which a scaled matrix is rank deficient
 
 
 @dataclass(frozen=True)
@@ -180,9 +183,11 @@ def partial_fractions(s: ComplexArray, reps: ComplexArray) -> ComplexArray:
     return out
 
 
-def full_basis(prob: Problem, reps: ComplexArray) -> ComplexArray:
-    """Partial fractions plus the D (1) and E (s) columns that are fitted: (K, Nc)."""
-    cols = [partial_fractions(prob.s, reps)]
+def full_basis(
+    prob: Problem, reps: ComplexArray, pf: ComplexArray | None = None
+) -> ComplexArray:
+    """Partial fractions (``pf`` if given) plus the fitted D (1) and E (s) columns: (K, Nc)."""
+    cols = [partial_fractions(prob.s, reps) if pf is None else pf]
     if prob.fit_d:
         cols.append(np.ones((prob.n_freq, 1), complex))
     if prob.fit_e:
@@ -196,9 +201,11 @@ def _realify(a: ComplexArray) -> FloatArray:
     return out
 
 
-def evaluate(prob: Problem, coef: Coefficients) -> ComplexArray:
-    """Model responses (K, M) at the problem's frequencies."""
-    basis = full_basis(prob, coef.reps)
+def evaluate(
+    prob: Problem, coef: Coefficients, pf: ComplexArray | None = None
+) -> ComplexArray:
+    """Model responses (K, M) at the problem's frequencies (``pf``: partial fractions)."""
+    basis = full_basis(prob, coef.reps, pf)
     x = [coef.c]
     if prob.fit_d:
         x.append(coef.d[:, None])
@@ -217,10 +224,22 @@ def weighted_rel_rms(prob: Problem, model: ComplexArray) -> float:
 
 # ---------------------------------------------------------------------- solves
 def _scaled_lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Least squares with unit-norm column scaling (columns of zeros give zero)."""
+    """Least squares with unit-norm column scaling (columns of zeros give zero).
+
+    Householder QR and a triangular solve; the SVD solver (minimum-norm solution) only
+    when the scaled matrix is numerically rank deficient.
+    """
     norms = np.linalg.norm(a, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
-    x = np.linalg.lstsq(a / norms, b, rcond=None)[0]
+    an = a / norms
+    x: FloatArray | None = None
+    if an.shape[0] >= an.shape[1]:
+        q, r = np.linalg.qr(an)
+        diag = np.abs(np.diag(r))
+        if diag.size == 0 or diag.min() > _RANK_TOL * diag.max():
+            x = sla.solve_triangular(r, q.T @ b, check_finite=False)
+    if x is None:
+        x = np.linalg.lstsq(an, b, rcond=None)[0]
     out: FloatArray = (x.T / norms).T
     return out
 
@@ -234,22 +253,33 @@ def _batched_scaled_lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
     return out
 
 
-def solve_residues(prob: Problem, reps: ComplexArray) -> Coefficients:
-    """Coefficients (C, D, E) of every response for fixed poles, in one batched solve.
+@dataclass(frozen=True)
+class _ResidueSystem:
+    """Weighted real least-squares system of the residues for fixed poles.
 
-    With a 0 Hz sample and ``fit_d`` the model matches Re H(0) exactly: D is eliminated by
-    the constraint ``D = H(0) - phi(0) c`` before the least-squares solve.
+    ``a`` (2K, Nk) with common weights or (M, 2K, Nk) with a weight per response, ``b``
+    (2K, M); ``keep`` the basis columns solved for (the D column is eliminated when the 0
+    Hz value is matched); ``h0``, ``phi0`` the 0 Hz constraint (or None).
     """
+
+    a: FloatArray
+    b: FloatArray
+    keep: list[int]
+    h0: FloatArray | None
+    phi0: FloatArray | None
+
+
+def _residue_system(prob: Problem, reps: ComplexArray, pf: ComplexArray | None) -> _ResidueSystem:
     n = n_poles(reps)
-    basis = full_basis(prob, reps)  # (K, Nc)
+    basis = full_basis(prob, reps, pf)  # (K, Nc)
     h = prob.h
     dc = prob.dc_index if prob.fit_d else None
+    h0 = phi0 = None
     if dc is not None:
-        basis = basis.copy()
         h0 = h[dc].real  # (M,)
         phi0 = basis[dc].real.copy()
         phi0[n] = 0.0  # the D column itself is eliminated
-        basis = basis - np.outer(np.ones(prob.n_freq), phi0)
+        basis = basis - phi0[None, :]
         basis[:, n] = 0.0
         h = h - h0[None, :]
     a = _realify(basis)  # (2K, Nc)
@@ -257,22 +287,148 @@ def solve_residues(prob: Problem, reps: ComplexArray) -> Coefficients:
     b = _realify(h) * w2  # (2K, M)
     keep = [j for j in range(a.shape[1]) if dc is None or j != n]
     if prob.w.shape[1] == 1:
-        x_keep = _scaled_lstsq(a[:, keep] * w2, b)  # (Nk, M)
+        aw = a[:, keep] * w2
     else:
         aw = a[None, :, keep] * w2.T[:, :, None]  # (M, 2K, Nk)
-        x_keep = _batched_scaled_lstsq(aw, b.T).T
-    x = np.zeros((a.shape[1], prob.n_resp))
-    x[keep] = x_keep
-    if dc is not None:
-        x[n] = h0 - phi0[:n] @ x[:n] - (phi0[n + 1 :] @ x[n + 1 :] if prob.fit_e else 0.0)
+    return _ResidueSystem(aw, b, keep, h0, phi0)
+
+
+def solve_residues(
+    prob: Problem, reps: ComplexArray, pf: ComplexArray | None = None
+) -> Coefficients:
+    """Coefficients (C, D, E) of every response for fixed poles, in one batched solve.
+
+    With a 0 Hz sample and ``fit_d`` the model matches Re H(0) exactly: D is eliminated by
+    the constraint ``D = H(0) - phi(0) c`` before the least-squares solve. ``pf``: the
+    partial fractions of ``reps`` if already computed.
+    """
+    n = n_poles(reps)
+    sys_ = _residue_system(prob, reps, pf)
+    if sys_.a.ndim == 2:
+        x_keep = _scaled_lstsq(sys_.a, sys_.b)  # (Nk, M)
+    else:
+        x_keep = _batched_scaled_lstsq(sys_.a, sys_.b.T).T
+    x = np.zeros((n + prob.n_extra, prob.n_resp))
+    x[sys_.keep] = x_keep
+    if sys_.h0 is not None and sys_.phi0 is not None:
+        phi0 = sys_.phi0
+        x[n] = sys_.h0 - phi0[:n] @ x[:n] - (phi0[n + 1 :] @ x[n + 1 :] if prob.fit_e else 0.0)
     m = prob.n_resp
     d = x[n] if prob.fit_d else np.zeros(m)
     e = x[n + int(prob.fit_d)] if prob.fit_e else np.zeros(m)
     return Coefficients(reps=reps, c=x[:n].T.copy(), d=np.asarray(d), e=np.asarray(e))
 
 
+def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
+    """Increase of the weighted squared error ||W (H_model - H)||_F^2 when one
+    representative (with its conjugate) is removed and the residues are re-solved, (n_rep,).
+
+    For a least-squares problem ``min ||A x - b||`` removing the column group ``G`` raises
+    the squared residual by ``x_G^T (S_GG)^-1 x_G`` with ``S = (A^T A)^-1`` (the
+    partial-F statistic of backward elimination), summed over the responses. ``S`` comes
+    from the triangular factor of the column-scaled QR. Numerically rank-deficient
+    systems give 0 for the affected poles (they are redundant).
+    """
+    n = n_poles(reps)
+    sys_ = _residue_system(prob, reps, None)
+    a = sys_.a if sys_.a.ndim == 3 else sys_.a[None]
+    b = sys_.b.T[:, :, None] if sys_.a.ndim == 3 else sys_.b[None]  # (Mw, 2K, M or 1)
+    norms = np.linalg.norm(a, axis=1, keepdims=True)
+    norms = np.where(norms > 0, norms, 1.0)
+    q, r = np.linalg.qr(a / norms)
+    nk = r.shape[-1]
+    with np.errstate(all="ignore"):
+        rinv = np.linalg.solve(r, np.broadcast_to(np.eye(nk), r.shape))
+        x = rinv @ (np.swapaxes(q, 1, 2) @ b)  # (Mw, Nk, M or 1), scaled coordinates
+        s_mat = rinv @ np.swapaxes(rinv, 1, 2)  # (Mw, Nk, Nk)
+        nr = int(np.sum(reps.imag == 0))
+        j1 = np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
+        cost = np.zeros(reps.size)
+        real_j = j1[:nr]
+        cost[:nr] = np.sum(x[:, real_j, :] ** 2 / s_mat[:, real_j, real_j][:, :, None], axis=(0, 2))
+        c1 = j1[nr:]
+        c2 = c1 + 1
+        s11 = s_mat[:, c1, c1][:, :, None]
+        s22 = s_mat[:, c2, c2][:, :, None]
+        s12 = s_mat[:, c1, c2][:, :, None]
+        x1, x2 = x[:, c1, :], x[:, c2, :]
+        det = s11 * s22 - s12**2
+        quad = (s22 * x1**2 - 2 * s12 * x1 * x2 + s11 * x2**2) / det
+        cost[nr:] = np.sum(quad, axis=(0, 2))
+    del n
+    out: FloatArray = np.where(np.isfinite(cost), np.maximum(cost, 0.0), 0.0)
+    return out
+
+
+def _gram_rows(gram: FloatArray) -> FloatArray:
+    """Square-root rows ``R`` with ``R^T R = gram`` (symmetric PSD, diagonally scaled)."""
+    dsc = 1.0 / np.sqrt(np.maximum(np.diag(gram), _TINY))
+    lam, vec = np.linalg.eigh(dsc[:, None] * gram * dsc[None, :])
+    out: FloatArray = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
+    return out
+
+
+def _sigma_rows_common(
+    prob: Problem, basis_c: ComplexArray, basis_s: ComplexArray, precise: bool
+) -> FloatArray:
+    """Reduced sigma rows for weights common to all responses.
+
+    ``Phi_c`` is the same for every response, so one QR ``W Phi_c = Q1 R1`` serves all of
+    them and the projections ``(I - Q1 Q1^T) a2_i`` of all responses are two matrix
+    products on the (2K, M (N+1)) block. The stacked least squares over the projected
+    blocks only depends on their Gram matrix ``sum_i proj_i^T proj_i`` (a GEMM), whose
+    square root gives the reduced rows.
+    """
+    k_f, m = prob.n_freq, prob.n_resp
+    n1 = basis_s.shape[1]
+    w = prob.w[:, 0]
+    q1, _ = np.linalg.qr(_realify(basis_c * w[:, None]))  # (2K, Nc)
+    prod = prob.wh[:, :, None] * basis_s[:, None, :]  # (K, M, N+1)
+    a2 = np.empty((2 * k_f, m, n1))
+    np.negative(prod.real, out=a2[:k_f])
+    np.negative(prod.imag, out=a2[k_f:])
+    a2f = a2.reshape(2 * k_f, m * n1)
+    bq = q1.T @ a2f  # (Nc, M (N+1))
+    if precise:
+        # projected blocks formed explicitly (in place), then their Gram matrix: no
+        # cancellation between sum a2^T a2 and sum B^T B when the fit is already good
+        a2f -= q1 @ bq
+        proj = a2.reshape(-1, n1)
+        return _gram_rows(proj.T @ proj)
+    # sum_i a2_i^T a2_i = Re(Phi_s^H diag(sum_i |w h_i|^2) Phi_s)
+    power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
+    gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
+    bflat = bq.reshape(-1, n1)
+    return _gram_rows(gram - bflat.T @ bflat)
+
+
+def _sigma_rows_per_response(
+    prob: Problem, basis_c: ComplexArray, basis_s: ComplexArray, precise: bool
+) -> FloatArray:
+    """Reduced sigma rows with a weight per response (one QR of W_i Phi_c each)."""
+    n1 = basis_s.shape[1]
+    wgt = prob.w  # (K, M)
+    w2 = np.concatenate([wgt, wgt], axis=0)  # (2K, M)
+    a1 = _realify(basis_c)  # (2K, Nc)
+    # -W H_i Phi_s for all responses: (M, 2K, N+1)
+    a2 = -_realify(prob.wh.T[:, :, None] * basis_s[None, :, :])
+    q1, _ = np.linalg.qr(a1[None] * w2.T[:, :, None])  # (M, 2K, Nc)
+    bq = np.swapaxes(q1, 1, 2) @ a2
+    if precise:  # R22 blocks of the QR of the projected systems, stacked
+        r22: FloatArray = np.asarray(np.linalg.qr(a2 - q1 @ bq, mode="r"))
+        return r22.reshape(-1, n1)
+    power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
+    gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
+    bflat = bq.reshape(-1, n1)
+    return _gram_rows(gram - bflat.T @ bflat)
+
+
 def relocate_poles(
-    prob: Problem, reps: ComplexArray, stable: bool = True, precise: bool = True
+    prob: Problem,
+    reps: ComplexArray,
+    stable: bool = True,
+    precise: bool = True,
+    pf: ComplexArray | None = None,
 ) -> tuple[ComplexArray, float]:
     """One relaxed pole-relocation step with the fast QR-reduced sigma system.
 
@@ -282,41 +438,24 @@ def relocate_poles(
     responses plus the relaxation row ``Re sum_k sigma(s_k) = K`` (Gustavsen 2006) give the
     sigma coefficients; the new poles are the zeros of sigma, eig(A - b c_s^T / d_s).
 
-    Returns the new representatives and max_k |sigma(s_k) - 1|.
+    ``precise=False`` replaces the reduced rows by a square root of their Gram matrix
+    ``sum_i a2_i^T a2_i - B_i^T B_i`` (``B_i = Q1^T a2_i``). It squares the condition
+    number, so it serves the growth steps of the automatic order; final relocations use
+    the QR-reduced rows.
+
+    Returns the new representatives and max_k |sigma(s_k) - 1|. ``pf``: the partial
+    fractions of ``reps`` if already computed.
     """
     n = n_poles(reps)
     k_f = prob.n_freq
-    pf = partial_fractions(prob.s, reps)  # (K, N)
-    basis_c = full_basis(prob, reps)
+    if pf is None:
+        pf = partial_fractions(prob.s, reps)  # (K, N)
+    basis_c = full_basis(prob, reps, pf)
     basis_s = np.concatenate([pf, np.ones((k_f, 1), complex)], axis=1)  # (K, N+1)
-    wgt = prob.w  # (K, Mw)
-    w2 = np.concatenate([wgt, wgt], axis=0)  # (2K, Mw)
-    a1 = _realify(basis_c)  # (2K, Nc)
-    # -W H_i Phi_s for all responses: (M, 2K, N+1)
-    a2 = -_realify(prob.wh.T[:, :, None] * basis_s[None, :, :])
-    if wgt.shape[1] == 1:
-        q1, _ = np.linalg.qr(a1 * w2)  # (2K, Nc)
-        bq = np.matmul(np.ascontiguousarray(q1.T), a2)  # (M, Nc, N+1)
+    if prob.w.shape[1] == 1:
+        rows = _sigma_rows_common(prob, basis_c, basis_s, precise)
     else:
-        q1, _ = np.linalg.qr(a1[None] * w2.T[:, :, None])  # (M, 2K, Nc)
-        bq = np.swapaxes(q1, 1, 2) @ a2
-    # Fast path (precise=False): only sum_i R22_i^T R22_i enters the stacked least squares;
-    # with the projector P = I - Q1 Q1^T it equals sum_i a2_i^T a2_i - B_i^T B_i with
-    # B_i = Q1^T a2_i, and sum_i a2_i^T a2_i = Re(Phi_s^H diag(sum_i |w_i H_i|^2) Phi_s).
-    # It squares the condition number, so it serves the growth steps of the automatic
-    # order; the final relocations use the QR-reduced rows (precise=True).
-    if precise:  # R22 blocks of the QR of the projected systems, stacked
-        proj = a2 - (q1 @ bq if q1.ndim == 3 else np.matmul(q1, bq))
-        r22: FloatArray = np.asarray(np.linalg.qr(proj, mode="r"))
-        rows = r22.reshape(-1, n + 1)
-    else:
-        power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
-        gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
-        bflat = bq.reshape(-1, n + 1)
-        gram = gram - bflat.T @ bflat
-        dsc = 1.0 / np.sqrt(np.maximum(np.diag(gram), _TINY))
-        lam, vec = np.linalg.eigh(dsc[:, None] * gram * dsc[None, :])
-        rows = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
+        rows = _sigma_rows_per_response(prob, basis_c, basis_s, precise)
     # relaxation row, scaled like the data (Gustavsen 2006, eq. (9)-(10))
     scale = float(np.linalg.norm(prob.wh)) / k_f
     relax = scale * np.sum(basis_s.real, axis=0)
@@ -337,12 +476,11 @@ def relocate_poles(
     bvec = np.zeros(n)
     a_mat[np.arange(nr), np.arange(nr)] = reps[:nr].real
     bvec[:nr] = 1.0
-    for j, p in enumerate(reps[nr:]):
-        i = nr + 2 * j
-        a_mat[i, i] = a_mat[i + 1, i + 1] = p.real
-        a_mat[i, i + 1] = p.imag
-        a_mat[i + 1, i] = -p.imag
-        bvec[i] = 2.0
+    i = nr + 2 * np.arange(reps.size - nr)
+    a_mat[i, i] = a_mat[i + 1, i + 1] = reps[nr:].real
+    a_mat[i, i + 1] = reps[nr:].imag
+    a_mat[i + 1, i] = -reps[nr:].imag
+    bvec[i] = 2.0
     z = np.asarray(np.linalg.eigvals(a_mat - np.outer(bvec, c_s) / d_s), dtype=complex)
     return reps_from_eigenvalues(z, stable), deviation
 
@@ -354,13 +492,26 @@ def iterate(
     max_iterations: int,
     tol: float,
     stable: bool = True,
-    precise: bool = True,
+    precise: bool | None = True,
+    patience: int = 3,
+    err_hint: float = np.inf,
+    target: float = 0.0,
 ) -> FixedOrderResult:
     """Relocate poles until converged; return the best coefficients seen.
 
     Converged when the weighted relative error is at machine level, when sigma has become
-    1 within ``tol`` (poles no longer move) or when the error changed by less than ``tol``
-    (relative) over the last iteration after at least two iterations.
+    1 within ``tol`` (poles no longer move), when the error changed by less than ``tol``
+    (relative) over the last iteration after at least two iterations, or when ``patience``
+    relocations in a row did not improve on the best error (stalled at its best).
+
+    ``precise=None`` chooses the sigma rows per relocation from the error of the previous
+    one (``err_hint`` before the first): the Gram form of :func:`relocate_poles` has an
+    absolute error of about eps ||a2||^2 against a smallest eigenvalue of about
+    (err ||a2||)^2, so it is used only while err^2 is far above eps (err > 1e-4).
+
+    ``target`` > 0 (a trial that must reach that error): give up, not converged, when
+    the error is above it and the last relocation gained less than half the relative
+    improvement still needed.
     """
     best: Coefficients | None = None
     best_err = np.inf
@@ -368,14 +519,21 @@ def iterate(
     prev = np.inf
     converged = False
     it = it_best = 0
+    pf = partial_fractions(prob.s, reps)
+    last = err_hint
     for it in range(1, max_iterations + 1):
-        reps, dev = relocate_poles(prob, reps, stable, precise)
-        coef = solve_residues(prob, reps)
-        err = weighted_rel_rms(prob, evaluate(prob, coef))
+        exact_rows = precise if precise is not None else bool(last <= _GRAM_ERROR)
+        reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf)
+        pf = partial_fractions(prob.s, reps)
+        coef = solve_residues(prob, reps, pf)
+        err = weighted_rel_rms(prob, evaluate(prob, coef, pf))
         history.append(IterationRecord(n_poles(reps), err, dev))
+        last = err
         if err < best_err:
             best, best_err, it_best = coef, err, it
-        if it - it_best >= 3:  # no improvement in three relocations: stalled at its best
+        if target > 0 and err > target and it >= 2 and prev - err < 0.5 * (err - target):
+            break  # improving too slowly to reach the target
+        if it - it_best >= patience:  # no recent improvement: stalled at its best
             converged = True
             break
         if dev <= tol or (it >= 2 and (err <= _EXACT_FIT or abs(prev - err) <= tol * prev)):
@@ -389,12 +547,23 @@ def iterate(
 
 
 def pole_contributions(prob: Problem, coef: Coefficients) -> FloatArray:
-    """Weighted RMS contribution of every representative (pair counted together), (n_rep,)."""
+    """Weighted RMS contribution of every representative (pair counted together), (n_rep,).
+
+    ``sum_k,i |w_ki (pf_k1 c_i1 + pf_k2 c_i2)|^2`` from the weighted Gram entries of the
+    basis columns of each representative (no (K, N, M) intermediate).
+    """
     pf = partial_fractions(prob.s, coef.reps)  # (K, N)
     nr = int(np.sum(coef.reps.imag == 0))
-    out = np.empty(coef.reps.size)
-    for j in range(coef.reps.size):
-        cols = [j] if j < nr else [nr + 2 * (j - nr), nr + 2 * (j - nr) + 1]
-        part = pf[:, cols] @ coef.c[:, cols].T  # (K, M)
-        out[j] = np.sqrt(np.mean(np.abs(prob.w * part) ** 2))
+    w2t = (prob.w**2).T  # (Mw, K)
+    diag = w2t @ (pf.real**2 + pf.imag**2)  # (Mw, N)
+    g1, g2 = pf[:, nr::2], pf[:, nr + 1 :: 2]
+    cross = w2t @ (g1.real * g2.real + g1.imag * g2.imag)  # (Mw, n_pairs)
+    c = coef.c  # (M, N)
+    real = np.sum(c[:, :nr] ** 2 * diag[:, :nr], axis=0)
+    c1, c2 = c[:, nr::2], c[:, nr + 1 :: 2]
+    pair = np.sum(
+        c1**2 * diag[:, nr::2] + 2 * c1 * c2 * cross + c2**2 * diag[:, nr + 1 :: 2], axis=0
+    )
+    ssq = np.maximum(np.concatenate([real, pair]), 0.0)
+    out: FloatArray = np.sqrt(ssq / (prob.n_freq * prob.n_resp))
     return out
