@@ -1,0 +1,120 @@
+#!/usr/bin/env python
+"""Write the concealed-effect datasets of the detective (``data/concealed/``).
+
+    .venv/bin/python scripts/make_concealed.py --out data/concealed [--only CASE] [--seed 0]
+
+Each case is a dataset generated with one effect present (small, under realistic noise)
+that the model the detective starts from lacks, or with nothing missing (null cases).
+``cases.json`` lists per case: the model (``--model`` file or PMSM ``--without`` list),
+the concealed effect and its location, the decoys (named but absent from the data) and the
+expected result. Deterministic for a given seed. ``--seed N --unseen`` draws other truth
+values and effect sizes (the acceptance style "datasets never seen").
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from vfmodel.detective.candidates import make_candidate
+from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.user_model import UserFamily, read_user_model
+from vfmodel.greybox.params import ParamSet
+
+ROOT = Path(__file__).resolve().parents[1]
+RC_MODEL = ROOT / "data" / "user-models" / "rc_ladder.net"
+
+# user-network cases: (effect, place, effect parameter values relative to the place)
+USER_CASES: dict[str, dict[str, object]] = {
+    "rc_dielectric_loss": {"effect": "insulation_dielectric_loss", "location": "C2",
+                           "values": {"k_d": 0.12, "f_relax_hz": 60e3}},
+    "rc_null": {"effect": None, "location": None, "values": {}},
+}
+
+
+def _write_csv(path: Path, f: np.ndarray, z: np.ndarray) -> None:
+    np.savetxt(path, np.column_stack([f, z.real, z.imag]), delimiter=",", fmt="%.10e",
+               header="frequency_hz,z_real_ohm,z_imag_ohm", comments="")
+
+
+def _truth_values(params: ParamSet, rng: np.random.Generator, sigma: float) -> ParamSet:
+    return params.perturbed(rng, sigma)
+
+
+def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int = 200,
+                   z_noise: float = 0.003, perturb: float = 0.2,
+                   band_hz: tuple[float, float] = (1e3, 1e7)) -> dict[str, object]:
+    """Write one RC-ladder case to ``out`` (atomically); returns its ``cases.json`` entry."""
+    model = read_user_model(RC_MODEL)
+    rng = np.random.default_rng(seed)
+    f = np.logspace(np.log10(band_hz[0]), np.log10(band_hz[1]), n_freq)
+    tp = _truth_values(model.params, rng, perturb)
+    # a family on dummy channels only to evaluate the truth network
+    chans = tuple(Channel(f"impedance:{p[0]}", f, np.ones(n_freq, complex), np.ones(n_freq))
+                  for p in model.ports)
+    fam = UserFamily(model, chans, band_hz)
+    applied: tuple[Candidate, ...] = ()
+    eff = case["effect"]
+    vals = dict(case["values"])  # type: ignore[call-overload]
+    if eff is not None:
+        loc = str(case["location"])
+        c_val = tp[loc] if loc in tp else 1.0
+        cand = make_candidate(str(eff), loc, c_val, band_hz)
+        p = f"{loc}.{eff}"
+        upd = {}
+        if "k_d" in vals:
+            upd = {f"{p}.k_d": vals["k_d"], f"{p}.tau_d": 1 / (2 * np.pi * vals["f_relax_hz"])}
+        tp = tp.with_specs(cand.params).with_values(upd)
+        applied = (cand,)
+    z = fam.predict(applied, tp)
+    tmp = Path(tempfile.mkdtemp(prefix=out.name + ".", dir=out.parent))
+    tmp.chmod(0o755)
+    try:
+        (tmp / "impedance").mkdir()
+        for (name, *_), zz in zip(model.ports, z, strict=True):
+            noise = z_noise * np.abs(zz) * (rng.standard_normal(n_freq)
+                                            + 1j * rng.standard_normal(n_freq)) / np.sqrt(2)
+            _write_csv(tmp / "impedance" / f"{name}.csv", f, zz + noise)
+        (tmp / "truth.json").write_text(json.dumps(
+            {"truth_params": tp.as_dict(), "effect": eff, "location": case["location"],
+             "z_noise": z_noise, "seed": seed}, indent=1) + "\n")
+        if out.exists():
+            shutil.rmtree(out)
+        tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return {"kind": "user", "model": str(RC_MODEL.relative_to(ROOT)), "without": [],
+            "effect": eff, "location": case["location"], "decoys": [],
+            "expected": {"mismatch_found": eff is not None,
+                         "findings": [] if eff is None else [[eff, case["location"]]]}}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=str(ROOT / "data" / "concealed"))
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", default=None, help="comma-separated case names")
+    a = ap.parse_args(argv)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    only = set(a.only.split(",")) if a.only else None
+    cases_path = out / "cases.json"
+    cases = json.loads(cases_path.read_text()) if cases_path.exists() else {}
+    for k, (name, case) in enumerate(USER_CASES.items()):
+        if only and name not in only:
+            continue
+        cases[name] = make_user_case(out / name, case, a.seed * 1000 + k)
+        print(f"wrote {out / name}", file=sys.stderr)
+    cases_path.write_text(json.dumps(cases, indent=1, sort_keys=True) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,56 @@
+"""``vfmodel diagnose DATASET [--without E1,...] [--model FILE] --out DIR`` (CONTRACT 3, 7)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
+
+
+def _effects(value: str) -> tuple[str, ...]:
+    from vfmodel._choices import EFFECTS
+
+    out = tuple(v.strip() for v in value.split(",") if v.strip())
+    bad = [v for v in out if v not in EFFECTS]
+    if bad:
+        raise click.BadParameter(f"{bad[0]!r} is not an effect; expected a comma-separated "
+                                 f"list of: {', '.join(EFFECTS)}")
+    return out
+
+
+@click.command()
+@click.argument("dataset", type=click.Path(path_type=Path))
+@click.option("--without", default="", help="Comma-separated effects removed from the "
+              "paper's full model to form the starting network (PMSM model).")
+@click.option("--model", "model", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="A user network (netlist with parameter bounds and .effect "
+              "candidates; see vfmodel.detective.user_model) instead of the PMSM model.")
+@click.option("--max-nfev", default=60, show_default=True, type=click.IntRange(5, 1000),
+              help="Function evaluations per refit.")
+@out_option
+@quiet_option
+def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int, out_dir: Path,
+             quiet: bool) -> None:
+    """Fit the starting network to DATASET, locate where it disagrees with the data beyond
+    the noise, try every effect it lacks, keep what the data support. Writes
+    DIR/diagnosis.json, figures (PNG) and DIR/report.html."""
+    from vfmodel.errors import InputError
+    from vfmodel.pipeline.diagnose import run_diagnose
+    from vfmodel.report.diagnose_figures import write_diagnose_figures, write_diagnose_html
+
+    if not dataset.exists():
+        raise InputError("dataset directory not found", source=str(dataset))
+    eff = _effects(without)
+    prog = progress_bar(quiet)
+    res = run_diagnose(dataset, without=eff, model=model, progress=prog, max_nfev=max_nfev)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prog("figures", 0, 1)
+    figs = write_diagnose_figures(res.family, res.diagnosis, out_dir)
+    prog("figures", 1, 1)
+    write_diagnose_html(out_dir / "report.html", res.document, figs)
+    # diagnosis.json last: its presence marks a complete output directory
+    write_json(out_dir / "diagnosis.json", res.document)
+    click.echo(res.document["sentence"])
+    click.echo(f"wrote {out_dir / 'diagnosis.json'}, report.html, {len(figs)} figures")

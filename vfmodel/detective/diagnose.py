@@ -1,0 +1,295 @@
+"""The detective loop: fit, locate, try every candidate, keep what the data support, repeat.
+
+1. Fit the starting network (bounded least squares of the noise-normalised log residual,
+   :mod:`.fit`); the noise of each channel was estimated beforehand (:mod:`.noise`).
+2. Locate bands where the fit disagrees with the data beyond the noise (:mod:`.locate`);
+   compare black-box poles with network poles (:mod:`.poles`).
+3. Refit every candidate change the network lacks (each a small multistart over its new
+   parameters with the others fixed, then a full warm-started refit) and compare by
+   ``Delta BIC = Delta chi2 + Delta k ln m`` (Schwarz 1978) and by held-out points: both
+   networks are refitted on the even points of every channel and scored on the odd ones.
+4. Accept the best candidate when a mismatch remains, ``Delta BIC < -bic_min``, and the
+   held-out chi-square falls by more than its number of new parameters; a second candidate
+   whose ``Delta BIC`` is within ``ambiguity`` of the best explains the data equally well:
+   the finding is then marked not identifiable with the alternatives named. Repeat until
+   no candidate is accepted; every other candidate is rejected with the reason.
+
+References
+----------
+G. Schwarz, Ann. Statist. 6(2), 461-464, 1978. doi:10.1214/aos/1176344136
+R. E. Kass, A. E. Raftery, "Bayes factors", J. Am. Stat. Assoc. 90(430), 773-795, 1995.
+doi:10.1080/01621459.1995.10476572 (BIC difference > 10: very strong evidence)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel.core.progress import Progress, no_progress
+from vfmodel.detective.fit import FitResult, refit
+from vfmodel.detective.locate import Mismatch, locate
+from vfmodel.detective.poles import PoleComparison, compare_poles
+from vfmodel.detective.problem import Candidate, Family, channel_slices
+from vfmodel.greybox.params import ParamSet
+
+__all__ = ["Diagnosis", "Finding", "Trial", "diagnose", "impedance_mape_pct"]
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One candidate refitted on top of a base network.
+
+    ``delta_chi2``, ``delta_bic``: candidate minus base (negative = better);
+    ``heldout_delta_chi2``: the same chi-square difference on the held-out (odd) points of
+    fits made on the even points; ``max_corr``: largest |correlation| between a new
+    parameter and any other; ``new_rel_std``: relative uncertainty of the new parameters.
+    """
+
+    candidate: Candidate
+    fit: FitResult
+    delta_chi2: float
+    delta_bic: float
+    heldout_delta_chi2: float
+    max_corr: float
+    corr_with: str
+    new_rel_std: dict[str, float]
+
+
+@dataclass(frozen=True)
+class Finding:
+    """An accepted change: before and after fits, the trial and identifiability notes."""
+
+    candidate: Candidate
+    before: FitResult
+    after: FitResult
+    trial: Trial
+    identifiable: bool
+    alternatives: tuple[str, ...]
+    note: str
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Result of :func:`diagnose`.
+
+    ``mismatches`` are those of the starting fit; ``remaining`` those of the final one;
+    ``rejected`` is (candidate, reason) for every candidate not accepted.
+    """
+
+    family: str
+    start: FitResult
+    final: FitResult
+    mismatches: tuple[Mismatch, ...]
+    remaining: tuple[Mismatch, ...]
+    findings: tuple[Finding, ...]
+    rejected: tuple[tuple[Candidate, str], ...]
+    poles_start: tuple[PoleComparison, ...]
+    poles_final: tuple[PoleComparison, ...]
+    trials: tuple[tuple[Trial, ...], ...]
+
+    @property
+    def mismatch_found(self) -> bool:
+        return bool(self.mismatches)
+
+
+def impedance_mape_pct(family: Family, fit: FitResult) -> float:
+    """Mean over impedance channels of mean ``|(|Z_model| - |Z_meas|)/|Z_meas||`` (%)."""
+    pred = family.predict(fit.applied, fit.params)
+    vals = [float(np.mean(np.abs(np.abs(h) - np.abs(c.measured)) / np.abs(c.measured))) * 100
+            for c, h in zip(family.channels, pred, strict=True)
+            if c.where.startswith("impedance:")]
+    return float(np.mean(vals)) if vals else float("nan")
+
+
+def _rows(family: Family, parity: int) -> NDArray[np.bool_]:
+    """Residual entries of the even (0) or odd (1) points of every channel."""
+    parts = []
+    for c in family.channels:
+        m = (np.arange(c.n) % 2) == parity
+        parts += [m, m]
+    return np.concatenate(parts)
+
+
+def _with_candidate(params: ParamSet, cand: Candidate) -> ParamSet:
+    return params.with_specs(cand.params)
+
+
+def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int) -> Trial:
+    applied = (*base.applied, cand)
+    p0 = _with_candidate(base.params, cand)
+    new = tuple(s.name for s in cand.params)
+    # small multistart over the new parameters with the others fixed
+    best: FitResult | None = None
+    for st in cand.starts or ((),):
+        ps = p0.with_values(dict(st), clip=True) if st else p0
+        f = refit(family, applied, ps, new, max_nfev=max_nfev) if new else \
+            refit(family, applied, ps, (), max_nfev=1)
+        if best is None or f.chi2 < best.chi2:
+            best = f
+    assert best is not None
+    full = refit(family, applied, best.params, max_nfev=max_nfev)
+    if full.chi2 > best.chi2:   # the full refit never makes it worse than the partial one
+        full = refit(family, applied, best.params, max_nfev=max_nfev * 2)
+    # held-out: fit both networks on the even points, score on the odd ones
+    ev, od = _rows(family, 0), _rows(family, 1)
+    b_ev = refit(family, base.applied, base.params, rows=ev, max_nfev=max_nfev)
+    c_ev = refit(family, applied, full.params, rows=ev, max_nfev=max_nfev)
+    ho = float(c_ev.residual[od] @ c_ev.residual[od] - b_ev.residual[od] @ b_ev.residual[od])
+    idx = [full.names.index(n) for n in new if n in full.names]
+    mc, cw = 0.0, ""
+    for i in idx:
+        row = np.abs(full.corr[i]).copy()
+        row[idx] = 0.0
+        if row.size and float(row.max()) > mc:
+            mc, cw = float(row.max()), f"{full.names[i]} ~ {full.names[int(np.argmax(row))]}"
+    return Trial(cand, full, full.chi2 - base.chi2, full.bic - base.bic, ho, mc, cw,
+                 {n: full.rel_std[n] for n in new if n in full.rel_std})
+
+
+def _reason(t: Trial, bic_min: float, mismatch_left: bool) -> str:
+    k = t.candidate.n_params
+    s = (f"Delta chi2 = {t.delta_chi2:+.1f} for {k} more parameter{'s' * (k != 1)}, "
+         f"Delta BIC = {t.delta_bic:+.1f}, held-out Delta chi2 = {t.heldout_delta_chi2:+.1f}")
+    if not mismatch_left:
+        return f"no mismatch beyond the noise is left to explain ({s})"
+    if t.delta_bic >= -bic_min:
+        return f"not supported by the data: {s} (needs Delta BIC < -{bic_min:g})"
+    if t.heldout_delta_chi2 >= -max(k, 1):
+        return f"does not improve held-out points: {s}"
+    return f"a better candidate explains the same mismatch ({s})"
+
+
+def _poles(family: Family, fit: FitResult) -> tuple[PoleComparison, ...]:
+    try:
+        net = family.poles(fit.applied, fit.params)
+    except Exception:  # a singular pencil only hides the pole map
+        return ()
+    out = []
+    for c in family.channels:
+        if c.blackbox_poles is not None:
+            out.append(compare_poles(c.blackbox_poles, net,
+                                     (float(c.freq_hz[0]), float(c.freq_hz[-1]))))
+    return tuple(out)
+
+
+def _best_start(family: Family, params: ParamSet, n_starts: int, seed: int,
+                max_nfev: int) -> FitResult:
+    best = refit(family, (), params, max_nfev=max_nfev)
+    rng = np.random.default_rng(seed)
+    names = family.free_names((), params)
+    for _ in range(n_starts - 1):
+        f = refit(family, (), best.params.perturbed(rng, 0.3, names), max_nfev=max_nfev)
+        if f.chi2 < best.chi2:
+            best = f
+    return best
+
+
+def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
+             alpha: float = 1e-3, n_starts: int = 3, seed: int = 0, max_nfev: int = 60,
+             max_findings: int = 3, progress: Progress = no_progress) -> Diagnosis:
+    """Run the detective on ``family`` (see the module docstring).
+
+    Parameters
+    ----------
+    family : Family
+        Starting network, data channels with noise, and candidate changes.
+    bic_min : float
+        A candidate must lower the BIC by more than this (10: very strong evidence).
+    ambiguity : float
+        Candidates within this BIC of the best are named as equally good alternatives.
+    alpha : float
+        Family-wise false-alarm probability of the mismatch location.
+    n_starts : int
+        Starts of the starting-network fit when it shows a mismatch (perturbed 0.3 in log)
+        so that a local minimum is not mistaken for missing physics.
+    max_findings : int
+        At most this many changes are added.
+    progress : callable
+        ``progress(stage, done, total)``.
+    """
+    progress("fit starting network", 0, 1)
+    start = _best_start(family, family.start_params(), 1, seed, max_nfev)
+    mism = locate(family.channels, start.residual, alpha=alpha)
+    if mism and n_starts > 1:
+        start = _best_start(family, start.params, n_starts, seed, max_nfev)
+        mism = locate(family.channels, start.residual, alpha=alpha)
+    progress("fit starting network", 1, 1)
+    poles0 = _poles(family, start)
+    cur, cur_mism = start, mism
+    findings: list[Finding] = []
+    remaining = list(family.candidates())
+    last: dict[tuple[str, str], Trial] = {}
+    rounds: list[tuple[Trial, ...]] = []
+    while remaining:
+        trials = []
+        for i, c in enumerate(remaining):
+            progress(f"candidates, round {len(rounds) + 1}", i, len(remaining))
+            trials.append(_try(family, cur, c, max_nfev))
+        progress(f"candidates, round {len(rounds) + 1}", len(remaining), len(remaining))
+        rounds.append(tuple(trials))
+        for t in trials:
+            last[t.candidate.key] = t
+        ok = [t for t in trials if t.delta_bic < -bic_min
+              and t.heldout_delta_chi2 < -max(t.candidate.n_params, 1)]
+        if not cur_mism or not ok or len(findings) >= max_findings:
+            break
+        best = min(ok, key=lambda t: t.delta_bic)
+        alts = tuple(f"{t.candidate.effect} at {t.candidate.location}" for t in ok
+                     if t is not best and t.delta_bic < best.delta_bic + ambiguity)
+        new_std = max(best.new_rel_std.values(), default=0.0)
+        identifiable = not alts and new_std < 1.0
+        notes = []
+        if alts:
+            notes.append("not identifiable from these data: " + ", ".join(alts)
+                         + f" explain them about as well (Delta BIC within {ambiguity:g})")
+        if new_std >= 1.0:
+            notes.append(f"its parameters are poorly determined (relative std {new_std:.2g}, "
+                         f"largest correlation {best.max_corr:.3f}: {best.corr_with})")
+        elif best.max_corr > 0.95:
+            notes.append(f"largest parameter correlation {best.max_corr:.3f} "
+                         f"({best.corr_with})")
+        findings.append(Finding(best.candidate, cur, best.fit, best, identifiable, alts,
+                                "; ".join(notes)))
+        cur = best.fit
+        cur_mism = locate(family.channels, cur.residual, alpha=alpha)
+        remaining = [c for c in remaining if c.key != best.candidate.key]
+    rejected = tuple((c, _reason(last[c.key], bic_min, bool(cur_mism)) if c.key in last
+                      else "not tried")
+                     for c in remaining)
+    return Diagnosis(family.name, start, cur, mism, tuple(cur_mism), tuple(findings), rejected,
+                     poles0, _poles(family, cur), tuple(rounds))
+
+
+def residual_by_channel(family: Family, fit: FitResult) -> list[ArrC]:
+    """Normalised residual of each channel as complex ``Re + j Im`` per point."""
+    out = []
+    for c, sl in zip(family.channels, channel_slices(family.channels), strict=True):
+        r = fit.residual[sl]
+        out.append(r[: c.n] + 1j * r[c.n:])
+    return out
+
+
+def sentence(diag: Diagnosis, explanations: dict[str, str] | None = None) -> str:
+    """The sentence that names the finding(s) (or says that nothing is missing)."""
+    if not diag.mismatch_found:
+        return (f"The starting network explains the data down to the noise "
+                f"(chi2_red = {diag.start.chi2_red:.3f}); nothing is missing.")
+    if not diag.findings:
+        return (f"The starting network disagrees with the data beyond the noise "
+                f"(chi2_red = {diag.start.chi2_red:.3f}, {len(diag.mismatches)} band(s)), but "
+                "no effect of the library explains it.")
+    parts = []
+    for f in diag.findings:
+        s = (f"{f.candidate.effect} at {f.candidate.location} is missing from the network: "
+             f"adding it lowers chi2_red from {f.before.chi2_red:.3f} to "
+             f"{f.after.chi2_red:.3f} (Delta BIC {f.trial.delta_bic:.1f})")
+        if not f.identifiable:
+            s += f" [{f.note}]"
+        parts.append(s)
+    return "; ".join(parts) + "."

@@ -1,0 +1,149 @@
+"""Figures and ``report.html`` of ``vfmodel diagnose``: normalised residuals with the
+located bands shaded, before/after overlays of every spectrum, and the pole map."""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vfmodel.core.atomic import atomic_write_text
+from vfmodel.detective.diagnose import Diagnosis, residual_by_channel
+from vfmodel.detective.problem import Family
+from vfmodel.report._mpl import pyplot, save
+
+__all__ = ["write_diagnose_figures", "write_diagnose_html"]
+
+
+def _safe(where: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in where)
+
+
+def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]:
+    """Write the PNG figures to ``out``; returns their file names."""
+    plt = pyplot()
+    names: list[str] = []
+    r0 = residual_by_channel(family, d.start)
+    r1 = residual_by_channel(family, d.final)
+    p0 = family.predict(d.start.applied, d.start.params)
+    p1 = family.predict(d.final.applied, d.final.params)
+    for k, c in enumerate(family.channels):
+        f = c.freq_hz
+        # residuals
+        fig, axs = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+        for ax, r, lab, mm in ((axs[0], r0[k], "starting network", d.mismatches),
+                               (axs[1], r1[k], "after the detective", d.remaining)):
+            ax.semilogx(f, r.real, ".", ms=3, label="Re (log-magnitude)")
+            ax.semilogx(f, r.imag, ".", ms=3, label="Im (phase)")
+            w = 16
+            if f.size >= w:
+                kern = np.ones(w) / w
+                ax.semilogx(f[w // 2 - 1: f.size - w // 2], np.convolve(r.real, kern, "valid"),
+                            "-", lw=1.5, label=f"Re, mean of {w}")
+                ax.semilogx(f[w // 2 - 1: f.size - w // 2], np.convolve(r.imag, kern, "valid"),
+                            "-", lw=1.5, label=f"Im, mean of {w}")
+            for m in mm:
+                if m.where == c.where:
+                    ax.axvspan(*m.band_hz, color="red", alpha=0.12)
+            ax.axhline(0, color="k", lw=0.5)
+            ax.set_ylabel("residual / noise std")
+            ax.set_title(f"{c.where}: {lab} (shaded: mismatch beyond noise)", fontsize=9)
+            ax.grid(True, which="both", alpha=0.3)
+        axs[0].legend(fontsize=7, ncol=4)
+        axs[1].set_xlabel("frequency (Hz)")
+        name = f"residual_{_safe(c.where)}.png"
+        save(fig, out / name)
+        names.append(name)
+        # overlays
+        fig, axs = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+        axs[0].loglog(f, np.abs(c.measured), "k.", ms=3, label="measured")
+        axs[0].loglog(f, np.abs(p0[k]), "-", label="starting network")
+        axs[0].loglog(f, np.abs(p1[k]), "--", label="after the detective")
+        axs[1].semilogx(f, np.angle(c.measured, deg=True), "k.", ms=3)
+        axs[1].semilogx(f, np.angle(p0[k], deg=True), "-")
+        axs[1].semilogx(f, np.angle(p1[k], deg=True), "--")
+        axs[0].set_ylabel("|Z| (ohm)")
+        axs[1].set_ylabel("phase (deg)")
+        axs[1].set_xlabel("frequency (Hz)")
+        axs[0].set_title(f"{c.where}: before/after", fontsize=9)
+        axs[0].legend(fontsize=8)
+        for ax in axs:
+            ax.grid(True, which="both", alpha=0.3)
+        name = f"overlay_{_safe(c.where)}.png"
+        save(fig, out / name)
+        names.append(name)
+    # pole map: black-box poles of every channel vs final network poles
+    bb = [c.blackbox_poles for c in family.channels if c.blackbox_poles is not None]
+    try:
+        net = family.poles(d.final.applied, d.final.params)
+        net0 = family.poles(d.start.applied, d.start.params)
+    except Exception:  # a singular network only hides the pole map
+        net = net0 = np.zeros(0, complex)
+    if bb or net.size:
+        fig, ax = plt.subplots(figsize=(6, 5))
+        for i, p in enumerate(bb):
+            q = p / (2 * np.pi)
+            ax.plot(-q.real, np.abs(q.imag), "x", label="black-box poles" if i == 0 else None)
+        for q, mk, lab in ((net0, "s", "starting network"), (net, "o", "final network")):
+            q = q / (2 * np.pi)
+            ax.plot(-q.real, np.abs(q.imag), mk, mfc="none", label=lab)
+        ax.set_xscale("log")
+        ax.set_yscale("symlog", linthresh=1e3)
+        ax.set_xlabel("-Re p / 2pi (Hz)")
+        ax.set_ylabel("|Im p| / 2pi (Hz)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+        ax.set_title("poles: black box (what the data support) vs network", fontsize=9)
+        save(fig, out / "poles.png")
+        names.append("poles.png")
+    extra = getattr(family, "write_extra_figures", None)
+    if callable(extra):
+        names += list(extra(d, out))
+    return names
+
+
+def _fmt(x: Any) -> str:
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    return html.escape(str(x))
+
+
+def write_diagnose_html(path: Path, doc: dict[str, Any], figures: list[str]) -> None:
+    """``report.html``: the sentence, mismatches, findings, rejected candidates, figures."""
+    e = html.escape
+    rows = "".join(f"<tr><td>{e(m['where'])}</td><td>{m['band_hz'][0]:.4g} - "
+                   f"{m['band_hz'][1]:.4g}</td><td>{m['significance']:.1f}</td>"
+                   f"<td>{e(m['statistic'])}</td></tr>" for m in doc["mismatches"])
+    finds = "".join(
+        f"<tr><td>{e(f['effect'])}</td><td>{e(f['location'])}</td>"
+        f"<td>{f['before']['chi2_red']:.3f} &rarr; {f['after']['chi2_red']:.3f}</td>"
+        f"<td>{_fmt(f['before']['impedance_mape_pct'])} &rarr; "
+        f"{_fmt(f['after']['impedance_mape_pct'])}</td><td>{f['delta_bic']:.1f}</td>"
+        f"<td>{e(f['explanation'])} {e(f['note'])}</td></tr>" for f in doc["findings"])
+    rej = "".join(f"<tr><td>{e(r['effect'])}</td><td>{e(r['location'])}</td>"
+                  f"<td>{e(r['reason'])}</td></tr>" for r in doc["rejected"])
+    imgs = "".join(f'<figure><img src="{e(n)}" style="max-width:100%"><figcaption>{e(n)}'
+                   "</figcaption></figure>" for n in figures)
+    text = f"""<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>vfmodel diagnose</title>
+<style>body{{font-family:sans-serif;max-width:1000px;margin:auto}}
+table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:90%}}
+</style></head><body>
+<h1>Discrepancy detective: {e(str(doc.get('model', '')))}</h1>
+<p><b>{e(doc['sentence'])}</b></p>
+<p>Starting network: chi2_red = {doc['start']['chi2_red']:.3f}; final: chi2_red =
+{doc['final']['chi2_red']:.3f}. Mismatch found: {doc['mismatch_found']}.</p>
+<h2>Where the starting network disagrees beyond the noise</h2>
+<table><tr><th>where</th><th>band (Hz)</th><th>significance (z)</th><th>test</th></tr>
+{rows}</table>
+<h2>Findings</h2>
+<table><tr><th>effect</th><th>location</th><th>chi2_red</th><th>MAPE %</th>
+<th>Delta BIC</th><th>physics</th></tr>{finds}</table>
+<h2>Rejected candidates</h2>
+<table><tr><th>effect</th><th>location</th><th>reason</th></tr>{rej}</table>
+<h2>Figures</h2>{imgs}
+</body></html>
+"""
+    atomic_write_text(path, text)
