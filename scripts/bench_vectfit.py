@@ -8,6 +8,9 @@ the same way for both tools on the same data and representation.
 
 ``--threads N`` sets OPENBLAS/OMP thread counts before numpy loads (both tools share it);
 on a loaded 2-core machine multithreaded BLAS slows both tools by an order of magnitude.
+The runs of the two tools alternate, so that a changing machine load affects both alike.
+scikit-rf's auto_fit on the CST file (601 points from 0 Hz) takes many minutes per run:
+use ``--cases cst --runs 1`` for it.
 """
 
 from __future__ import annotations
@@ -75,7 +78,10 @@ def main() -> int:
         fd = FrequencyData(f, truth(f), kind="Z").to_kind("S", 50.0)
         cases["synthetic 4-port S (true order 14 per Z, <=56 in S)"] = (fd, "s", {})
 
-    print(f"BLAS threads: {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}, runs: {args.runs}")
+    print(
+        f"BLAS threads: {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}, runs: {args.runs}",
+        flush=True,
+    )
     header = (
         f"{'case':<52} {'skrf s':>8} {'vfm s':>8} {'ratio':>7} {'skrf N':>7} {'vfm N':>6} "
         f"{'skrf relRMS':>12} {'vfm relRMS':>11}"
@@ -105,15 +111,17 @@ def main() -> int:
         ts, tv = statistics.median(t_skrf), statistics.median(t_vf)
         print(
             f"{name:<52} {ts:8.3f} {tv:8.3f} {ts / tv:7.1f} {skrf_order(vf_skrf):7d} "
-            f"{report.order:6d} {rel(h_skrf, data_h):12.3e} {rel(model(fd.freq_hz), data_h):11.3e}"
+            f"{report.order:6d} {rel(h_skrf, data_h):12.3e} {rel(model(fd.freq_hz), data_h):11.3e}",
+            flush=True,
         )
-        print(f"    vfmodel: {report.order_reason}")
+        print(f"    vfmodel: {report.order_reason}", flush=True)
         if name == "agilent":
             # equal-order comparison: vfmodel with scikit-rf's order given
             _m_eq, r_eq = vector_fit(fd, skrf_order(vf_skrf), spacing="lin")
             print(
                 f"    vfmodel at scikit-rf's order {r_eq.order}: rel RMS {r_eq.rel_rms_error:.3e} "
-                f"({r_eq.n_iterations} iterations)"
+                f"({r_eq.n_iterations} iterations)",
+                flush=True,
             )
     return 0
 

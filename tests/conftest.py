@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
-import shutil
-from pathlib import Path
+import os
 
-import numpy as np
-import pytest
+# one BLAS thread per test process (set before numpy loads): batched solves on a shared
+# 2-core machine are 10-100x slower with BLAS threads fighting the xdist workers
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from vfmodel.testing import make_small_dataset
+import shutil  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from vfmodel.testing import make_small_dataset  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 TOUCHSTONE_DIR = REPO / "data" / "touchstone"

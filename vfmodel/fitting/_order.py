@@ -288,7 +288,7 @@ def auto_order(
         n_it += final.n_iterations
         history.extend(final.history)
         converged = final.converged
-        if final.weighted_rel_rms <= max(limit, now):
+        if final.weighted_rel_rms <= now:
             coef = final.coef
     err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
     n = core.n_poles(coef.reps)

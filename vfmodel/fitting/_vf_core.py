@@ -232,15 +232,15 @@ def _scaled_lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
     norms = np.linalg.norm(a, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
     an = a / norms
-    x: FloatArray | None = None
     if an.shape[0] >= an.shape[1]:
         q, r = np.linalg.qr(an)
         diag = np.abs(np.diag(r))
         if diag.size == 0 or diag.min() > _RANK_TOL * diag.max():
-            x = sla.solve_triangular(r, q.T @ b, check_finite=False)
-    if x is None:
-        x = np.linalg.lstsq(an, b, rcond=None)[0]
-    out: FloatArray = (x.T / norms).T
+            x = np.asarray(sla.solve_triangular(r, q.T @ b, check_finite=False), dtype=float)
+            out: FloatArray = (x.T / norms).T
+            return out
+    x = np.asarray(np.linalg.lstsq(an, b, rcond=None)[0], dtype=float)
+    out = (x.T / norms).T
     return out
 
 
