@@ -1,0 +1,112 @@
+#!/usr/bin/env python
+"""Benchmark of ``vfmodel reproduce``: time of each stage and the acceptance numbers.
+
+    .venv/bin/python scripts/bench_reproduce.py [DATASET] [--out DIR] [--ngspice]
+
+Runs the reproduce pipeline (identification, validation, BVR baseline, black box) on
+DATASET (default data/pmsm40kw), writes the outputs like the CLI, prints the wall time per
+progress stage and the must-show numbers of issue 7 against their targets, and with
+``--ngspice`` checks that ngspice's .ac of every exported netlist reproduces the modelled
+impedances (max relative deviation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("dataset", nargs="?", default="data/pmsm40kw")
+    ap.add_argument("--out", default=None, help="output directory (default: a temp dir)")
+    ap.add_argument("--sections", default="2,3,4")
+    ap.add_argument("--ngspice", action="store_true")
+    a = ap.parse_args(argv)
+
+    from vfmodel.cli._common import write_json
+    from vfmodel.core.atomic import atomic_write_text
+    from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.pipeline.reproduce import reproduce
+    from vfmodel.report.html import write_reproduce_html
+    from vfmodel.report.reproduce_figures import write_figures
+
+    times: dict[str, float] = {}
+    order: list[str] = []
+    cur = [""]
+    since = [time.perf_counter()]
+
+    def progress(stage: str, done: int, total: int) -> None:
+        now = time.perf_counter()
+        if stage != cur[0]:
+            if cur[0]:
+                times[cur[0]] = times.get(cur[0], 0.0) + now - since[0]
+            cur[0], since[0] = stage, now
+            if stage not in order:
+                order.append(stage)
+
+    t0 = time.perf_counter()
+    ds = read_dataset(a.dataset)
+    t_read = time.perf_counter() - t0
+    res = reproduce(ds, sections=tuple(int(s) for s in a.sections.split(",")),
+                    progress=progress)
+    progress("(end)", 0, 0)
+    t_pipe = time.perf_counter() - t0
+    out = Path(a.out) if a.out else Path(__import__("tempfile").mkdtemp(prefix="repro-"))
+    out.mkdir(parents=True, exist_ok=True)
+    t1 = time.perf_counter()
+    for name, text in res.netlists.items():
+        atomic_write_text(out / name, text)
+    figs = write_figures(res, out)
+    write_reproduce_html(out / "report.html", res.results, figs)
+    write_json(out / "results.json", res.results)
+    t_write = time.perf_counter() - t1
+    print(f"dataset {a.dataset}: read {t_read:.1f} s")
+    for s in order:
+        if s in times:
+            print(f"  {s:40s} {times[s]:7.1f} s")
+    print(f"  {'figures, report, netlists':40s} {t_write:7.1f} s")
+    print(f"total {t_pipe + t_write:.1f} s (target < 300 s on 2 cores); outputs in {out}")
+    r = res.results
+    imp, bea = r["impedance"], r["bearing"]
+    base = r["baseline_bvr"]
+    print(f"winding sections selected: {r['model']['n_sections']}")
+    print(f"impedance mean MAPE {imp['mean_mape_pct']:.3f} % (target <= 3), mean coherence "
+          f"{imp['mean_coherence']:.5f} (target >= 0.995)")
+    for k, v in bea.items():
+        if isinstance(v, dict):
+            print(f"  {k:>5} rpm: peak meas {v['peak_measured_v']:.3f} V model "
+                  f"{v['peak_model_v']:.3f} V  abs {v['abs_err_v']:.3f} V rel "
+                  f"{v['rel_err_pct']:.2f} %  corr {v['spectral_corr']:.4f}  | BVR model "
+                  f"{base[k]['peak_model_v']:.3f} V rel {base[k]['rel_err_pct']:.1f} %  "
+                  f"film R {v['lubricant']['r_ohm']:.3g} ohm C {v['lubricant']['c_f']:.3g} F")
+    print(f"mean rel peak error rotating {bea.get('mean_rel_err_pct_rotating', float('nan')):.2f} %"
+          f" (target <= 5); abs error at 0 rpm "
+          f"{bea.get('0', {}).get('abs_err_v', float('nan')):.3f} V (target <= 0.08); "
+          f"mean spectral corr {bea['mean_spectral_corr']:.4f} (target >= 0.95)")
+    print(f"grey box beats BVR at every speed: {all(r['greybox_beats_baseline'].values())}")
+    if a.ngspice:
+        from vfmodel.circuit.ngspice import run_ac
+        from vfmodel.circuit.spice_import import from_spice
+        from vfmodel.greybox.assembly import TOPOLOGY_PORTS
+
+        worst = 0.0
+        for text in res.netlists.values():
+            circ = from_spice(text)
+            for p, n in TOPOLOGY_PORTS.values():
+                net = text.replace("\n.end", f"\nIZ {n} {p} DC 0 AC 1\n.end")
+                probe = f"v({p})" if n == "0" else f"v({p},{n})"
+                ac = run_ac(net, [probe], f_start_hz=1e3, f_stop_hz=1e7, points_per_decade=20)
+                z = circ.port_impedance(ac.freq_hz, [(p, n)])[:, 0, 0]
+                worst = max(worst, float(np.max(np.abs(ac.values[:, 0] - z) / np.abs(z))))
+        print(f"ngspice .ac of {len(res.netlists)} netlists x 6 topologies: max rel. "
+              f"deviation {worst:.2e} (target <= 1e-6)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

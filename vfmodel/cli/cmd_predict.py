@@ -1,0 +1,89 @@
+"""``vfmodel predict MODEL RECORDING|--inverter KEY=VALUE,... --out DIR`` (CONTRACT 3)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
+from vfmodel.errors import InputError
+
+
+def _parse_inverter(text: str) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in text.split(","):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise InputError("inverter option must be KEY=VALUE", place="--inverter",
+                             found=repr(item))
+        k, v = item.split("=", 1)
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise InputError("inverter option value must be a number", place=k.strip(),
+                             found=repr(v)) from None
+    return out
+
+
+@click.command()
+@click.argument("model", type=click.Path(path_type=Path))
+@click.argument("recording", type=click.Path(path_type=Path), required=False)
+@click.option("--inverter", default=None, metavar="KEY=VALUE,...",
+              help="Inverter description instead of a recording, e.g. "
+                   "'v_dc=270,f_sw_hz=8000,speed_rpm=300' (keys: see the docs of "
+                   "vfmodel.pipeline.predict.inverter_options).")
+@out_option
+@quiet_option
+def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: Path,
+            quiet: bool) -> None:
+    """Bearing voltage predicted by an identified model (MODEL: a network_<rpm>rpm.cir
+    written by 'vfmodel reproduce') for the terminal voltages of RECORDING or for an
+    inverter description. Writes DIR/prediction.npz, DIR/prediction.json and
+    DIR/prediction.png."""
+    import numpy as np
+
+    from vfmodel.circuit.spice_import import from_spice
+    from vfmodel.core.atomic import atomic_path
+    from vfmodel.core.io_recording import read_recording
+    from vfmodel.pipeline.predict import predict_inverter, predict_recording
+
+    if (recording is None) == (inverter is None):
+        raise click.UsageError("give either RECORDING or --inverter")
+    if not model.is_file():
+        raise InputError("model file not found", source=str(model))
+    circ = from_spice(model.read_text(encoding="utf-8", errors="replace"), source=str(model))
+    prog = progress_bar(quiet)
+    prog("predict", 0, 1)
+    if recording is not None:
+        pred = predict_recording(circ, read_recording(recording))
+    else:
+        pred = predict_inverter(circ, _parse_inverter(inverter or ""))
+    prog("predict", 1, 1)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    arrays = {"fs": np.float64(pred.fs), "u_U": pred.terminals[0], "u_V": pred.terminals[1],
+              "u_W": pred.terminals[2], "u_B": pred.u_b}
+    if pred.u_b_measured is not None:
+        arrays["u_B_measured"] = pred.u_b_measured
+    with atomic_path(out_dir / "prediction.npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+    from vfmodel.report._mpl import pyplot, save
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(9, 4))
+    t = np.arange(pred.u_b.size) / pred.fs * 1e3
+    if pred.u_b_measured is not None:
+        ax.plot(t, pred.u_b_measured, lw=0.6, label="measured (10 MHz filter)")
+    ax.plot(t, pred.u_b, lw=0.6, label="predicted")
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("u_B (V)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, out_dir / "prediction.png")
+    summary = {**pred.summary, "model": str(model),
+               "excitation": str(recording) if recording is not None else inverter}
+    write_json(out_dir / "prediction.json", summary)
+    click.echo(f"predicted peak bearing voltage {pred.summary['peak_model_v']:.4g} V; "
+               f"wrote {out_dir / 'prediction.json'}")

@@ -1,0 +1,376 @@
+"""Residual vectors and Jacobians of the grey-box identification (conditions 1 and 2).
+
+Parameters are varied as ``x = log(value)``. Element values of the network are functions of
+the parameters (:func:`vfmodel.greybox.assembly.element_values`); their log-derivatives
+``d log v_e / d log p_j`` are taken by central differences of that (cheap, solve-free)
+mapping. The derivative of a response then follows by the chain rule:
+
+    dH/dx_j = sum_e (dH/dv_e) v_e (d log v_e / d log p_j).
+
+Condition 1 (impedance spectra, standstill): ``r = log(Z_model / Z_meas) / sigma`` split
+into real part (log-magnitude ratio) and imaginary part (phase difference, rad);
+``dH/dv_e`` by the adjoint method of the MNA system (exact).
+
+Condition 2 (bearing transfer, paper eq. 21): ``H1_meas`` is the H1 estimate of the
+filtered record (terminals -> u_B); ``H1_model`` the same estimator applied to the model
+output computed from the same filtered terminal voltages in periodic steady state (the
+network transfer on every FFT bin of the record, ``Y = sum_i H_i X_i``, inverse FFT), so a
+record that does not start from rest and film time constants longer than the record are
+handled. ``r = (H1_model - H1_meas) / sigma`` with ``sigma^2 = h_std^2 + (eps |H1_meas|)^2``
+(H1 uncertainty plus a relative model-error floor). Its Jacobian is by forward differences
+in ``x`` (each costs one pole-residue evaluation of the network, :mod:`._fast`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import NDArray
+
+from vfmodel._choices import BearingState
+from vfmodel.circuit.mna import MnaSystem
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.recording import Recording
+from vfmodel.greybox._fast import transfer_on
+from vfmodel.greybox._h1op import H1Operator, h1_operator
+from vfmodel.greybox._network import NetSpec
+from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
+from vfmodel.greybox.params import ParamSet
+from vfmodel.signals.filters import brickwall_filter
+from vfmodel.signals.h1 import H1Result, h1_analysis
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+F_CUT_HZ = 10e6
+_LOG_STEP = 1e-6       # central-difference step of d log v / d log p
+_FD_STEP = 1e-4        # forward-difference step (log) of the condition-2 Jacobian
+_FD_MAX = 12
+_J_DENSE_HZ = 50e3     # condition-2 Jacobian: every record bin up to here, then H1 bins
+
+
+def values_of(params: ParamSet, spec: NetSpec, state: BearingState,
+              sources: bool = False) -> ArrF:
+    """Element values (in circuit parameter order) of the network for ``params``."""
+    return spec.build(params, state, sources).param_values
+
+
+def dlogv_dlogp(params: ParamSet, names: Sequence[str], spec: NetSpec,
+                state: BearingState, sources: bool = False) -> ArrF:
+    """``d log v_e / d log p_j`` (n_elements, n_names) by differences of step 1e-6."""
+    v0 = np.log(values_of(params, spec, state, sources))
+    cols = []
+    for n in names:
+        x0 = params[n]
+        step = _LOG_STEP if x0 * np.exp(_LOG_STEP) <= params.spec(n).upper else -_LOG_STEP
+        p1 = params.with_values({n: x0 * np.exp(step)}, clip=True)
+        cols.append((np.log(values_of(p1, spec, state, sources)) - v0) / step)
+    return np.stack(cols, axis=1) if cols else np.zeros((v0.size, 0))
+
+
+@dataclass(frozen=True)
+class LogMap:
+    """``d log v / d log p`` of a network structure for the parameters ``names``.
+
+    The element values are products of powers of the parameters except for a few sums
+    (e.g. ``L_ext = (1 - l_frac) L``); the columns that are constant are computed once
+    (forward differences at the start and at a second point detect the others), the
+    non-constant ones are recomputed at every call of :meth:`at`.
+    """
+
+    spec: NetSpec
+    names: tuple[str, ...]
+    const: ArrF                       # (n_elements, n_names)
+    varying: tuple[int, ...]
+
+    def at(self, params: ParamSet) -> ArrF:
+        if not self.varying:
+            return self.const
+        out = self.const.copy()
+        sub = [self.names[j] for j in self.varying]
+        out[:, list(self.varying)] = dlogv_dlogp(params, sub, self.spec, "standstill")
+        return out
+
+
+def log_map(params: ParamSet, names: Sequence[str], spec: NetSpec) -> LogMap:
+    """:class:`LogMap` of ``spec`` for ``names`` (element order of every state/sources)."""
+    names = tuple(names)
+    a0 = dlogv_dlogp(params, names, spec, "standstill")
+    lo, hi = params.log_bounds(names)
+    x1 = np.clip(params.to_log(names) + 0.3, lo, hi)
+    a1 = dlogv_dlogp(params.from_log(x1, names), names, spec, "standstill")
+    varying = tuple(int(j) for j in np.flatnonzero(np.max(np.abs(a1 - a0), axis=0) > 1e-5))
+    return LogMap(spec, names, a0, varying)
+
+
+# ----------------------------------------------------------------------------- condition 1
+def noise_sigma_log(z: ArrC) -> float:
+    """Noise level (std of ``log Z`` per real component) from second differences.
+
+    For a response smooth on the frequency grid, the second difference of ``log Z`` is
+    noise with variance ``6 sigma^2``; the median absolute deviation makes resonances
+    (large but few second differences) harmless.
+    """
+    lz = np.log(z)
+    d2 = np.concatenate([np.diff(lz.real, 2), np.diff(lz.imag, 2)])
+    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    return max(1.4826 * mad / np.sqrt(6.0), 1e-4)
+
+
+@dataclass(frozen=True)
+class ImpedanceTerm:
+    """Condition 1: the measured spectra of the topologies and the compiled network."""
+
+    topologies: tuple[str, ...]
+    freq_hz: ArrF
+    z_meas: ArrC          # (n_f, n_t)
+    sigma: ArrF           # (n_t,)
+    mna: MnaSystem
+    spec: NetSpec
+
+    @property
+    def n_residuals(self) -> int:
+        return 2 * self.z_meas.size
+
+    def model(self, params: ParamSet, freq_hz: ArrF | None = None) -> ArrC:
+        """Model impedances (n_f, n_t) (on ``freq_hz``, default the measured grid)."""
+        f = self.freq_hz if freq_hz is None else freq_hz
+        v = values_of(params, self.spec, "standstill")
+        pairs = [TOPOLOGY_PORTS[t] for t in self.topologies]
+        z = self.mna.response(f, pairs, pairs, v)
+        zd = np.stack([z[:, i, i] for i in range(len(pairs))], axis=1)
+        if "fixture_inductance" in self.spec.effects:
+            zd = zd + 2j * np.pi * f[:, None] * params["fixture.L"]
+        return zd
+
+    def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
+                 lmap: LogMap | None = None) -> tuple[ArrF, ArrF | None]:
+        """``r`` (2 n_f n_t,) and, with ``jac``, ``dr/dx`` (2 n_f n_t, n_names); ``lmap``
+        (for ``names``) saves recomputing the value map."""
+        v = values_of(params, self.spec, "standstill")
+        pairs = [TOPOLOGY_PORTS[t] for t in self.topologies]
+        nt = len(pairs)
+        if jac:
+            z, dz = self.mna.response_and_jacobian(self.freq_hz, pairs, pairs, v)
+            idx = np.arange(nt)
+            zd = z[:, idx, idx]
+            dzd = dz[:, idx, idx, :]                                  # (f, t, e)
+        else:
+            z = self.mna.response(self.freq_hz, pairs, pairs, v)
+            zd = np.stack([z[:, i, i] for i in range(nt)], axis=1)
+        fix = "fixture_inductance" in self.spec.effects
+        if fix:
+            zd = zd + 2j * np.pi * self.freq_hz[:, None] * params["fixture.L"]
+        lr = np.log(zd / self.z_meas) / self.sigma[None, :]
+        r = np.concatenate([lr.real.ravel(), lr.imag.ravel()])
+        if not jac:
+            return r, None
+        dl = (lmap.at(params) if lmap is not None
+              else dlogv_dlogp(params, names, self.spec, "standstill"))
+        dzx = np.einsum("fte,e,ej->ftj", dzd, v, dl)
+        if fix and "fixture.L" in names:
+            j = list(names).index("fixture.L")
+            dzx[:, :, j] += 2j * np.pi * self.freq_hz[:, None] * params["fixture.L"]
+        dlr = dzx / zd[:, :, None] / self.sigma[None, :, None]
+        jm = np.concatenate([dlr.real.reshape(-1, len(names)), dlr.imag.reshape(-1, len(names))])
+        return r, jm
+
+
+def impedance_term(spectra: dict[str, FrequencyData], spec: NetSpec, params: ParamSet,
+                   topologies: Iterable[str] | None = None) -> ImpedanceTerm:
+    """Condition-1 term of the spectra (all on one frequency grid, as in a dataset)."""
+    topo = tuple(t for t in (topologies or spectra) if t in spectra)
+    f0 = spectra[topo[0]].freq_hz
+    for t in topo[1:]:
+        if spectra[t].freq_hz.shape != f0.shape or not np.allclose(spectra[t].freq_hz, f0):
+            raise ValueError("impedance spectra must share one frequency grid")
+    z = np.stack([spectra[t].to_kind("Z").values[:, 0, 0] for t in topo], axis=1)
+    sig = np.array([noise_sigma_log(z[:, i]) for i in range(len(topo))])
+    return ImpedanceTerm(topo, f0, z, sig, spec.build(params, "standstill").mna, spec)
+
+
+# ----------------------------------------------------------------------------- condition 2
+@dataclass(frozen=True)
+class PreparedRecording:
+    """A recording after the 10 MHz filter, its spectrum and its H1 transfer.
+
+    The H1 estimate is computed on the filtered record resampled (exactly, by truncating
+    its spectrum: it holds nothing above ``f_cut``) to ``fs_h1 >= 2.5 f_cut``; the Welch
+    segments then span the same times and give the same frequency grid at a fraction of
+    the cost. ``terminals``/``bearing`` keep the full rate (peaks, spectra).
+    """
+
+    speed_rpm: float
+    fs: float
+    terminals: ArrF       # (3, n) filtered
+    bearing: ArrF         # (n,) filtered
+    bins_hz: ArrF         # FFT bins 0..f_cut of the whole record
+    x_bins: ArrC          # (3, n_bins) rfft of the terminals on those bins
+    n_h1: int             # samples of the resampled record used for H1
+    terminals_h1: ArrF    # (3, n_h1)
+    h1: H1Result
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.terminals.shape[1])
+
+    @property
+    def fs_h1(self) -> float:
+        return self.fs * self.n_h1 / self.n_samples
+
+
+def _resample(spec: ArrC, n: int, n_new: int) -> ArrF:
+    """Samples (n_new,) of the periodic signal whose first rfft bins of an n-sample record
+    are ``spec`` (..., n_bins)."""
+    out = np.zeros((*spec.shape[:-1], n_new // 2 + 1), complex)
+    k = min(spec.shape[-1], n_new // 2 + 1)
+    out[..., :k] = spec[..., :k] * (n_new / n)
+    return np.asarray(sfft.irfft(out, n=n_new, axis=-1), dtype=float)
+
+
+def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
+                      nperseg: int | None = None) -> PreparedRecording:
+    """Filter (brickwall), transform and H1-analyse a recording (paper Sec. II-C, III-C)."""
+    fs = rec.fs
+    x = brickwall_filter(rec.terminals, fs, f_cut_hz)
+    y = brickwall_filter(rec.bearing, fs, f_cut_hz)
+    n = x.shape[1]
+    freq = sfft.rfftfreq(n, 1.0 / fs)
+    sel = freq <= min(f_cut_hz, fs / 2)
+    xb = sfft.rfft(x, axis=1)[:, sel]
+    q = max(1, int(fs // (2.5 * f_cut_hz)))
+    n_h1 = n // q
+    if q > 1:
+        xh = _resample(xb, n, n_h1)
+        yh = _resample(sfft.rfft(y)[sel], n, n_h1)
+    else:
+        xh, yh = x, y
+    if nperseg is not None and q > 1:
+        nperseg = max(16, nperseg // q)
+    h1 = h1_analysis(xh, yh, fs * n_h1 / n, nperseg=nperseg,
+                     input_names=["u_U", "u_V", "u_W"], output_names=["u_B"])
+    return PreparedRecording(float(rec.speed_rpm or 0.0), fs, x, y, freq[sel], xb, n_h1, xh,
+                             h1)
+
+
+def steady_output(h_bins: ArrC, prep: PreparedRecording, *, for_h1: bool = False) -> ArrF:
+    """Periodic steady-state model output from the transfer (n_bins, 1, 3) on the bins
+    (full rate, or ``for_h1`` at the rate of the H1 record)."""
+    yb = np.einsum("fi,if->f", h_bins[:, 0, :], prep.x_bins)
+    return _resample(yb, prep.n_samples, prep.n_h1 if for_h1 else prep.n_samples)
+
+
+@dataclass(frozen=True)
+class BearingTerm:
+    """Condition 2 at one speed: measured H1 and the compiled network of that state."""
+
+    prep: PreparedRecording
+    state: BearingState
+    op: H1Operator
+    h_meas: ArrC          # (n_fm, 3) on the operator's bins
+    sigma: ArrF           # (n_fm, 3)
+    mna: MnaSystem
+    b: ArrF
+    cout: ArrF
+    spec: NetSpec
+
+    @property
+    def n_residuals(self) -> int:
+        return 2 * self.h_meas.size
+
+    @property
+    def freq_hz(self) -> ArrF:
+        return self.op.freq_hz[self.op.mask]
+
+    def transfer_bins(self, params: ParamSet) -> ArrC:
+        """Network transfer (n_bins, 1, 3) on the record's FFT bins."""
+        v = values_of(params, self.spec, self.state, sources=True)
+        return transfer_on(self.mna, self.b, self.cout, v, self.prep.bins_hz)
+
+    def output(self, params: ParamSet) -> ArrF:
+        """Modelled bearing voltage (periodic steady state, filtered inputs)."""
+        return steady_output(self.transfer_bins(params), self.prep)
+
+    def h1_model(self, params: ParamSet) -> ArrC:
+        """H1 of the model output (same estimator as the measurement, eq. 21)."""
+        return self.op.apply(steady_output(self.transfer_bins(params), self.prep, for_h1=True))
+
+    def _r(self, h1m: ArrC) -> ArrF:
+        d = (h1m - self.h_meas) / self.sigma
+        return np.concatenate([d.real.ravel(), d.imag.ravel()])
+
+    def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
+                 lmap: LogMap | None = None, method: str = "auto",
+                 ) -> tuple[ArrF, ArrF | None]:
+        """``r`` and, with ``jac``, ``dr/dx``: ``method`` ``"adjoint"``, ``"fd"`` or ``"auto"``
+        (forward differences for up to ``_FD_MAX`` parameters, else adjoint).
+
+        ``adjoint``: ``dH/dx`` by the adjoint method on a coarse grid (every record bin up to
+        ``_J_DENSE_HZ``, then every second H1 bin), interpolated linearly onto every record bin,
+        turned into output derivatives ``dY = sum_i dH_i X_i`` and passed through the same
+        H1 operator (the operator is linear). ``fd``: forward differences of the residual.
+        """
+        r = self._r(self.h1_model(params))
+        if not jac:
+            return r, None
+        if not names:
+            return r, np.zeros((r.size, 0))
+        if method == "fd" or (method == "auto" and len(names) <= _FD_MAX):
+            cols = []
+            for n in names:
+                x0 = params[n]
+                step = _FD_STEP if x0 * np.exp(_FD_STEP) <= params.spec(n).upper \
+                    else -_FD_STEP
+                p1 = params.with_values({n: x0 * np.exp(step)}, clip=True)
+                cols.append((self._r(self.h1_model(p1)) - r) / step)
+            return r, np.stack(cols, axis=1)
+        fb = self.prep.bins_hz
+        grid = np.union1d(fb[fb <= _J_DENSE_HZ], self.freq_hz[::2])
+        grid = grid[grid > 0]
+        v = values_of(params, self.spec, self.state, sources=True)
+        _, dh = self.mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
+        dl = (lmap.at(params) if lmap is not None
+              else dlogv_dlogp(params, names, self.spec, self.state, sources=True))
+        dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v, dl)      # (n_p, 3, n_g)
+        # linear interpolation onto the record bins (DC: the lowest grid value)
+        fi = np.interp(fb, grid, np.arange(grid.size))
+        i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
+        i1 = np.clip(i0 + 1, 0, grid.size - 1)
+        w = fi - i0
+        dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
+        dyb = np.einsum("jif,if->jf", dfine, self.prep.x_bins)
+        dy = _resample(dyb, self.prep.n_samples, self.prep.n_h1)
+        dh1 = self.op.apply(dy) / self.sigma[None]                    # (n_p, n_fm, 3)
+        jm = np.concatenate([dh1.real.reshape(len(names), -1),
+                             dh1.imag.reshape(len(names), -1)], axis=1).T
+        return r, np.ascontiguousarray(jm)
+
+
+def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
+                 state: BearingState, f_min_hz: float = 5e3,
+                 f_max_hz: float = F_CUT_HZ, model_error: float = 0.02,
+                 min_coherence: float = 0.5) -> BearingTerm:
+    """Condition-2 term of one prepared recording.
+
+    Bins from ``f_min_hz`` to ``f_max_hz`` where the H1 estimate is valid and the multiple
+    coherence is at least ``min_coherence``; ``model_error`` is the relative error floor
+    ``eps`` of ``sigma``.
+    """
+    h1 = prep.h1
+    f = h1.freq_hz
+    coh = np.nan_to_num(h1.coherence[:, 0])
+    mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz) & (coh >= min_coherence)
+    if mask.sum() < 10:
+        mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz)
+    op = h1_operator(prep.terminals_h1, prep.fs_h1, h1, mask)
+    hm = h1.h[mask, 0, :]
+    sd = h1.h_std[mask, 0, :]
+    sig = np.sqrt(sd**2 + (model_error * np.abs(hm)) ** 2)
+    sig = np.maximum(sig, 1e-12 * np.max(np.abs(hm)))
+    mna = spec.build(params, state, sources=True).mna
+    b = mna.input_matrix(list(SOURCES))
+    cout = mna.output_matrix([BEARING_NODE])
+    return BearingTerm(prep, state, op, hm, sig, mna, b, cout, spec)

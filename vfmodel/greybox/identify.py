@@ -1,0 +1,464 @@
+"""Identification of the grey-box network (reference paper Sec. III-C, conditions 1 and 2).
+
+Stages (each a bounded nonlinear least-squares problem in ``x = log(parameter)``, solved by
+scipy's trust-region-reflective method; Jacobians: adjoint MNA sensitivities chained with
+the parameter-to-element map for the spectra, adjoint or forward differences for the H1
+transfer, see :mod:`._objective`):
+
+1. ``impedance, n sections`` - condition 1 alone: every machine parameter (winding,
+   insulation, frame, shaft, balls, bearing air capacitance) from the CM/DM impedance
+   spectra, from a start scaled to the low-frequency data (:func:`initial_params`). The
+   winding discretisation (sections per phase, :mod:`._network`; 2 = the paper's model) is
+   a model-order choice: candidates are fitted in increasing order while the reduced
+   chi-square keeps falling by more than ``min_gain``, and the best is kept. Optional
+   multistart (``n_starts``).
+2. ``standstill 0 rpm`` - conditions 1 and 2 together: the same parameters from the spectra
+   and the H1 transfer of the 0 rpm recording (metallic contact closed), which the paper
+   identifies together because both are taken at standstill;
+3. ``lubricant <rpm>`` - condition 2 at each rotating speed with every other parameter
+   fixed: the lubricant film (``lubricant.*``), the Hertzian-contact resistance and the edge
+   capacitance (contact switch open), from the previous speed's values and from the film
+   capacitance implied by the average bearing-voltage ratio (best of the two starts).
+
+A weak Gaussian prior in log space towards the start values (``prior_sigma``) keeps
+parameters that the data of a stage cannot see (the air-gap capacitance at standstill is
+shorted by the shaft and the closed contact; a film resistance far above the H1 band) at
+their start instead of drifting along flat valleys.
+
+Parameter uncertainties are the standard deviations of ``log p`` from the Gauss-Newton
+covariance ``s^2 (J^T J)^+`` at the solution, ``s^2`` the reduced chi-square (relative
+standard uncertainty of ``p``); an unidentifiable parameter shows a large value (or about
+``prior_sigma`` with the prior).
+
+References
+----------
+M. A. Branch, T. F. Coleman, Y. Li, "A subspace, interior, and conjugate gradient method
+for large-scale bound-constrained minimization problems", SIAM J. Sci. Comput. 21(1),
+1-23, 1999. doi:10.1137/S1064827595289108
+J. S. Bendat, A. G. Piersol, *Random Data*, 4th ed., Wiley, 2010 (H1 estimator).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from vfmodel._choices import BearingState
+from vfmodel.core.dataset import Dataset
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.progress import Progress, no_progress
+from vfmodel.errors import InputError
+from vfmodel.greybox._network import NetSpec
+from vfmodel.greybox._objective import (
+    BearingTerm,
+    ImpedanceTerm,
+    PreparedRecording,
+    bearing_term,
+    dlogv_dlogp,
+    impedance_term,
+    log_map,
+    prepare_recording,
+)
+from vfmodel.greybox.assembly import default_params, divider_capacitances
+from vfmodel.greybox.bvr_baseline import average_bvr, common_mode
+from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.params import ParamSet
+
+__all__ = [
+    "Identification",
+    "SpeedFit",
+    "StageReport",
+    "bearing_state",
+    "film_equivalent",
+    "fit_stage",
+    "identify",
+    "initial_params",
+    "lubricant_names",
+    "machine_names",
+]
+
+ArrF = NDArray[np.float64]
+Term = ImpedanceTerm | BearingTerm
+
+
+@dataclass(frozen=True)
+class StageReport:
+    """Result of one identification stage.
+
+    ``chi2_red`` is ``sum r^2 / (m - n)`` of the weighted residual; ``rel_std`` the relative
+    standard uncertainty of each free parameter.
+    """
+
+    name: str
+    names: tuple[str, ...]
+    n_residuals: int
+    chi2_red: float
+    nfev: int
+    status: int
+    rel_std: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SpeedFit:
+    """Identified network at one recorded speed."""
+
+    speed_rpm: float
+    state: BearingState
+    params: ParamSet
+    term: BearingTerm
+    report: StageReport | None
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Everything the identification produced.
+
+    ``params``: machine parameters (standstill); ``speeds``: one :class:`SpeedFit` per
+    recording (sorted by speed); ``impedance``: the condition-1 term (measured spectra).
+    """
+
+    params: ParamSet
+    spec: NetSpec
+    impedance: ImpedanceTerm | None
+    speeds: tuple[SpeedFit, ...]
+    stages: tuple[StageReport, ...]
+    machine_rel_std: dict[str, float]
+
+
+def bearing_state(speed_rpm: float, effects: Iterable[str]) -> BearingState:
+    """``standstill`` (metallic contact closed) at 0 rpm with ``metallic_contact``, else
+    ``rotating``."""
+    return "standstill" if speed_rpm <= 0 and "metallic_contact" in set(effects) else "rotating"
+
+
+def lubricant_names(params: ParamSet, effects: Iterable[str]) -> tuple[str, ...]:
+    """Speed-dependent parameters: the film layers, contact resistance and edge capacitance."""
+    eff = set(effects)
+    out = ["lubricant.R_1", "lubricant.C_1"]
+    if "lubricant_two_layer" in eff:
+        out += ["lubricant.R_2", "lubricant.C_2"]
+    if "lubricant_dielectric_loss" in eff:
+        out += ["lubricant.k_d", "lubricant.tau_d"]
+    out.append("bearing.R_h")
+    if "hertzian_edge_capacitance" in eff:
+        out.append("bearing.C_edge")
+    return tuple(n for n in out if n in params)
+
+
+def machine_names(params: ParamSet, spec: NetSpec) -> tuple[str, ...]:
+    """Parameters of the standstill network that change it (others are dropped)."""
+    eff = spec.effects
+    lub = set(lubricant_names(params, eff)) | {n for n in params.names
+                                               if n.startswith("lubricant.")}
+    cand = [n for n in params.names if n not in lub and n != "fixture.L"]
+    d = dlogv_dlogp(params, cand, spec, "standstill")
+    keep = [n for j, n in enumerate(cand) if np.any(np.abs(d[:, j]) > 1e-9)]
+    if "fixture_inductance" in eff and "fixture.L" in params:
+        keep.append("fixture.L")
+    return tuple(keep)
+
+
+def film_equivalent(params: ParamSet, effects: Iterable[str]) -> dict[str, float]:
+    """Equivalent lubricant-film R and C of one bearing (``results.json`` ``lubricant``).
+
+    ``r_ohm``: DC resistance of the film, ``R_1 (+ R_2)`` (layers in series; the loss branch
+    carries no DC). ``c_f``: its capacitance above the RC corners, ``C_1 (1 + k_d)`` in
+    series with ``C_2`` (two-layer film), the film part of the paper's ``C_b``.
+    """
+    eff = set(effects)
+    dc = divider_capacitances(params, eff)
+    c_film = dc["c_b"] - params["bearing.C_air"] - (
+        params["bearing.C_edge"] if "hertzian_edge_capacitance" in eff else 0.0)
+    r = params["lubricant.R_1"] + (params["lubricant.R_2"] if "lubricant_two_layer" in eff
+                                   else 0.0)
+    return {"r_ohm": float(r), "c_f": float(c_film)}
+
+
+def initial_params(spectra_term: ImpedanceTerm | None, base: ParamSet | None = None) -> ParamSet:
+    """Nominal parameters scaled to the low-frequency data.
+
+    Capacitances to frame and rotor are scaled by the ratio of measured to modelled CM
+    capacitance at the lowest frequency; per-phase ``L_w`` and ``R_w`` come from the three
+    DM spectra at the lowest frequency (``Z_UV = Z_U + Z_V`` etc. solved per phase).
+    """
+    p = default_params() if base is None else base
+    if spectra_term is None:
+        return p
+    t = spectra_term
+    f0 = t.freq_hz[:1]
+    zm = t.model(p, f0)[0]
+    zd = t.z_meas[0]
+    idx = {n: i for i, n in enumerate(t.topologies)}
+    upd: dict[str, float] = {}
+    cm = [n for n in ("U-Frame", "V-Frame", "W-Frame") if n in idx]
+    if cm:
+        ratio = float(np.mean([zm[idx[n]].imag / zd[idx[n]].imag for n in cm]))
+        if np.isfinite(ratio) and ratio > 0:
+            for n in p.names:
+                if n.endswith((".C_t", ".C_wf")) or n in ("insulation.C_wr", "airgap.C_rf"):
+                    upd[n] = p[n] * ratio
+    if all(n in idx for n in ("U-V", "V-W", "W-U")):
+        w = 2 * np.pi * f0[0]
+        a, b, c = (zd[idx[n]] for n in ("U-V", "V-W", "W-U"))
+        per = {"U": (a - b + c) / 2, "V": (a + b - c) / 2, "W": (-a + b + c) / 2}
+        for ph, z in per.items():
+            if z.imag > 0:
+                upd[f"winding.{ph}.L_w"] = z.imag / w
+            if z.real > 0:
+                upd[f"winding.{ph}.R_w"] = z.real
+    return p.with_values(upd, clip=True)
+
+
+# ----------------------------------------------------------------------------- solver
+def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequence[str],
+              stage: str = "fit", max_nfev: int = 40, prior_sigma: float = 0.0,
+              progress: Progress = no_progress) -> tuple[ParamSet, StageReport]:
+    """Minimise the weighted residuals of ``terms`` over ``log`` of the ``names``.
+
+    Trust-region reflective least squares within the parameters' bounds; the report holds
+    the reduced chi-square and the relative standard uncertainties (Gauss-Newton
+    covariance scaled by the reduced chi-square). ``prior_sigma > 0`` adds the residuals
+    ``(log p - log p_start) / prior_sigma`` (a weak Gaussian prior in log space): a
+    parameter the data do not see (e.g. the air-gap capacitance at standstill, shorted by
+    the metallic contact) then stays at its start instead of drifting along a flat valley;
+    its reported uncertainty is then about ``prior_sigma``.
+    """
+    names = tuple(names)
+    lo, hi = params.log_bounds(names)
+    x0 = np.clip(params.to_log(names), lo, hi)
+    rcache: dict[bytes, ArrF] = {}
+    jcache: dict[bytes, ArrF] = {}
+    count = [0]
+    # one value map for every term (same structure; state and sources add no parameters)
+    lmap = log_map(params, names, terms[0][0].spec)
+
+    def fun(x: ArrF) -> ArrF:
+        key = x.tobytes()
+        if key not in rcache:
+            p = params.from_log(x, names)
+            rs = [wgt * term.residual(p)[0] for term, wgt in terms]
+            if prior_sigma > 0:
+                # weak prior towards the start: holds directions the data do not see
+                rs.append((x - x0) / prior_sigma)
+            rcache.clear()
+            rcache[key] = np.concatenate(rs)
+            count[0] += 1
+            progress(stage, min(count[0], max_nfev), max_nfev)
+        return rcache[key]
+
+    def jac(x: ArrF) -> ArrF:
+        # the Jacobian only where the solver asks for it (accepted points)
+        key = x.tobytes()
+        if key not in jcache:
+            p = params.from_log(x, names)
+            js = []
+            for term, wgt in terms:
+                _, j = term.residual(p, names, jac=True, lmap=lmap)
+                assert j is not None
+                js.append(wgt * j)
+            if prior_sigma > 0:
+                js.append(np.eye(x.size) / prior_sigma)
+            jcache.clear()
+            jcache[key] = np.concatenate(js)
+        return jcache[key]
+
+    progress(stage, 0, max_nfev)
+    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev,
+                        xtol=1e-7, ftol=1e-6)
+    progress(stage, max_nfev, max_nfev)
+    r, jm = fun(res.x), jac(res.x)
+    dof = max(r.size - len(names), 1)
+    chi2 = float(r @ r) / dof
+    rel = _rel_std(jm, chi2)
+    return params.from_log(res.x, names), StageReport(
+        stage, names, int(r.size), chi2, int(res.nfev), int(res.status),
+        {n: float(s) for n, s in zip(names, rel, strict=True)})
+
+
+def _rel_std(jac: ArrF, chi2_red: float) -> ArrF:
+    """Standard deviation of ``log p`` from ``chi2_red (J^T J)^+`` (SVD pseudo-inverse)."""
+    if jac.size == 0:
+        return np.zeros(jac.shape[1])
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    keep = s > s[0] * 1e-10
+    cov = (vt[keep].T / s[keep] ** 2) @ vt[keep]
+    var = np.diag(cov) * chi2_red
+    # a direction the data do not see at all: infinite uncertainty
+    null = np.sum(vt[~keep] ** 2, axis=0) > 1e-6 if np.any(~keep) else np.zeros(jac.shape[1], bool)
+    out = np.sqrt(np.maximum(var, 0.0))
+    out[null] = np.inf
+    return out
+
+
+def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
+             names: Sequence[str], stage: str, max_nfev: int, prior_sigma: float,
+             progress: Progress) -> tuple[ParamSet, StageReport]:
+    best: tuple[ParamSet, StageReport] | None = None
+    for k, s in enumerate(starts):
+        lab = stage if len(starts) == 1 else f"{stage} (start {k + 1}/{len(starts)})"
+        p, rep = fit_stage(terms, s, names, lab, max_nfev=max_nfev, prior_sigma=prior_sigma,
+                           progress=progress)
+        if best is None or rep.chi2_red < best[1].chi2_red:
+            best = (p, StageReport(stage, rep.names, rep.n_residuals, rep.chi2_red, rep.nfev,
+                                   rep.status, rep.rel_std))
+    assert best is not None
+    return best
+
+
+# ----------------------------------------------------------------------------- driver
+def _thin(spectra: dict[str, FrequencyData], max_points: int) -> dict[str, FrequencyData]:
+    """Every k-th point of each spectrum so that at most ``max_points`` remain."""
+    out = {}
+    for t, fd in spectra.items():
+        k = max(1, int(np.ceil(fd.n_freq / max_points)))
+        out[t] = fd if k == 1 else FrequencyData(fd.freq_hz[::k], fd.values[::k],
+                                                 kind=fd.kind, z0=fd.z0, source=fd.source)
+    return out
+
+
+def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
+             sections: Sequence[int] = (2, 3, 4), n_rungs: int = 3,
+             start: ParamSet | None = None, n_starts: int = 1, seed: int = 0,
+             max_nfev: int = 40, weight_bearing: float = 1.0, fit_points: int = 201,
+             min_gain: float = 0.2, prior_sigma: float = 1.0, max_nfev_standstill: int = 12,
+             prepared: dict[float, PreparedRecording] | None = None,
+             progress: Progress = no_progress) -> Identification:
+    """Identify the grey-box network from a dataset (see the module docstring).
+
+    Parameters
+    ----------
+    dataset : Dataset
+        Impedance spectra (any subset of the six topologies) and recordings.
+    effects : iterable of Effect
+        Effects of the model network (default: the full model of the paper).
+    sections : sequence of int
+        Candidate numbers of winding sections per phase (:mod:`._network`; 2 is the paper's
+        model). They are tried in increasing order on the impedance spectra; the next one
+        is tried only while the previous one lowered the reduced chi-square by more than
+        the fraction ``min_gain``, and the best is kept.
+    start : ParamSet, optional
+        Start values (default: :func:`initial_params`).
+    n_starts : int
+        Starts of the impedance stage for the selected structure (the first is the best
+        fit, the others log-normal perturbations, sigma 0.5, of the winding parameters).
+    weight_bearing : float
+        Weight of condition 2 relative to condition 1 in the standstill stage.
+    max_nfev_standstill : int
+        Evaluation limit of the standstill stage (it starts at the impedance optimum; each
+        evaluation with its Jacobian is the most expensive of the pipeline).
+    prior_sigma : float
+        Weak prior (log units) towards the start values in the machine stages
+        (:func:`fit_stage`); 0 disables it.
+    fit_points : int
+        The impedance stages use every k-th frequency point so that at most this many
+        remain per spectrum (metrics use all points).
+    prepared : dict, optional
+        Recordings already prepared by :func:`prepare_recording`, by speed.
+    progress : callable
+        ``progress(stage, done, total)``.
+    """
+    eff = check_effects(effects)
+    if not dataset.impedance and not dataset.recordings:
+        raise InputError("dataset holds neither impedance spectra nor recordings",
+                         source=dataset.name)
+    p0 = default_params() if start is None else start
+    stages: list[StageReport] = []
+    rel: dict[str, float] = {}
+    cands = sorted(set(int(n) for n in sections)) or [2]
+    spec = NetSpec(eff, n_rungs, cands[0])
+    imp: ImpedanceTerm | None = None
+    p = p0
+    # --- stage 1: impedance spectra, structure selection
+    if dataset.impedance:
+        thin = _thin(dataset.impedance, fit_points)
+        best: tuple[float, NetSpec, ParamSet, StageReport] | None = None
+        for n in cands:
+            sp = NetSpec(eff, n_rungs, n)
+            term = impedance_term(thin, sp, p0)
+            ps = initial_params(term, p0) if start is None else p0
+            names = machine_names(ps, sp)
+            pn, rep = fit_stage([(term, 1.0)], ps, names, f"impedance, {n} sections",
+                                max_nfev=max_nfev, prior_sigma=prior_sigma,
+                                progress=progress)
+            stages.append(rep)
+            improved = best is None or rep.chi2_red < best[0] * (1 - min_gain)
+            if best is None or rep.chi2_red < best[0]:
+                best = (rep.chi2_red, sp, pn, rep)
+            if not improved:
+                break
+        assert best is not None
+        _, spec, p, rep = best
+        if n_starts > 1:
+            term = impedance_term(thin, spec, p0)
+            rng = np.random.default_rng(seed)
+            names = machine_names(p, spec)
+            wind = [n for n in names if n.startswith("winding.")]
+            starts = [p] + [p.perturbed(rng, 0.5, wind) for _ in range(n_starts - 1)]
+            p, rep = _best_of(starts, [(term, 1.0)], names, "impedance multistart", max_nfev,
+                              prior_sigma, progress)
+            stages.append(rep)
+        rel = rep.rel_std
+        imp = impedance_term(dataset.impedance, spec, p)
+        imp_fit: ImpedanceTerm = impedance_term(thin, spec, p)
+    names = machine_names(p, spec)
+    # --- recordings
+    prep = dict(prepared or {})
+    recs = sorted(dataset.recordings, key=lambda r: float(r.speed_rpm or 0.0))
+    for k, r in enumerate(recs):
+        sp_rpm = float(r.speed_rpm or 0.0)
+        if sp_rpm not in prep:
+            progress("prepare recordings", k, len(recs))
+            prep[sp_rpm] = prepare_recording(r)
+    progress("prepare recordings", len(recs), len(recs))
+    fits: list[SpeedFit] = []
+    stand = [s for s in sorted(prep) if bearing_state(s, eff) == "standstill"]
+    if stand:
+        term0 = bearing_term(prep[stand[0]], spec, p, "standstill")
+        terms: list[tuple[Term, float]] = [(term0, weight_bearing)]
+        if imp is not None:
+            terms.insert(0, (imp_fit, 1.0))
+        p, rep = fit_stage(terms, p, names, f"standstill {stand[0]:g} rpm",
+                           max_nfev=min(max_nfev, max_nfev_standstill),
+                           prior_sigma=prior_sigma, progress=progress)
+        stages.append(rep)
+        rel = rep.rel_std
+    for s in stand:
+        fits.append(SpeedFit(s, "standstill", p, bearing_term(prep[s], spec, p, "standstill"),
+                             None))
+    lub = lubricant_names(p, eff)
+    cur = p
+    for s in sorted(prep):
+        if s in stand:
+            continue
+        bterm = bearing_term(prep[s], spec, cur, "rotating")
+        starts = _lubricant_starts(cur, prep[s], eff)
+        fit_p, rep = _best_of(starts, [(bterm, 1.0)], lub, f"lubricant {s:g} rpm", max_nfev,
+                              prior_sigma, progress)
+        stages.append(rep)
+        fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep))
+        cur = fit_p
+    fits.sort(key=lambda f: f.speed_rpm)
+    if imp is not None and stand:
+        imp = impedance_term(dataset.impedance, spec, p)
+    return Identification(p, spec, imp, tuple(fits), tuple(stages), rel)
+
+
+def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
+                      effects: frozenset[str]) -> list[ParamSet]:
+    """Warm start (previous speed) and a start whose film capacitance matches the average
+    bearing-voltage ratio of the record (eq. 1 solved for C_b)."""
+    starts = [previous]
+    dc = divider_capacitances(previous, effects)
+    bvr = average_bvr(common_mode(prep.terminals), prep.bearing)
+    if bvr > 0:
+        c_b = (dc["c_wr"] / bvr - dc["c_wr"] - dc["c_rf"]) / 2
+        if c_b > 0:
+            k = c_b / dc["c_b"]
+            upd = {n: previous[n] * k for n in ("lubricant.C_1", "lubricant.C_2",
+                                                 "bearing.C_edge") if n in previous}
+            starts.append(previous.with_values(upd, clip=True))
+    return starts

@@ -1,0 +1,125 @@
+"""Validation metrics of the grey-box model (CONTRACT section 6, reference paper Tables II-III).
+
+Definitions (the numbers written to ``results.json``):
+
+``mape_pct`` (impedance)
+    Mean over the spectrum's frequency points of ``|(|Z_model| - |Z_meas|) / |Z_meas|| * 100``.
+``coherence`` (impedance; the paper's "coherence coefficient", its ref. [22])
+    The consistency of two responses to the same excitation across frequency, 0..1, 1 for
+    identical shapes. Implemented as the frequency response assurance criterion (FRAC) of
+    the two responses normalised point by point by ``|Z_meas|``:
+    ``|sum_k a_k b_k^*|^2 / (sum_k |a_k|^2 sum_k |b_k|^2)`` with ``a_k = Z_model,k / |Z_meas,k|``
+    and ``b_k = Z_meas,k / |Z_meas,k|``. The normalisation gives every frequency point the
+    same weight (as in the MAPE) instead of letting the largest impedance values dominate;
+    like every coherence it is insensitive to a common scale factor (the MAPE is not).
+``peak`` (bearing voltage)
+    ``max |u_B|`` over the record after the 10 MHz FFT brickwall filter.
+``abs_err_v``, ``rel_err_pct``
+    ``|peak_model - peak_measured|`` and ``100 * abs_err_v / peak_measured``.
+``spectral_corr``
+    Pearson correlation coefficient of the magnitude spectra ``|FFT(u_B)|`` of measured and
+    modelled bearing voltage over the bins 0-10 MHz (the paper's "coherence coefficient of
+    spectrum distribution", Table III).
+
+References
+----------
+W. Heylen, S. Lammens, P. Sas, *Modal Analysis Theory and Testing*, KU Leuven, 1997
+(frequency response assurance criterion). R. J. Allemang, "The modal assurance criterion -
+twenty years of use and abuse", Sound and Vibration 37(8), 14-23, 2003.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import ArrayLike, NDArray
+
+from vfmodel.errors import InputError
+from vfmodel.signals.filters import brickwall_filter
+
+__all__ = [
+    "F_CUT_HZ",
+    "band_mape_pct",
+    "coherence_coefficient",
+    "mape_pct",
+    "peak_errors",
+    "peak_v",
+    "spectral_corr",
+]
+
+F_CUT_HZ = 10e6
+"""Model bandwidth and brickwall cut-off (paper Sec. II-C)."""
+
+
+def _pair(model: ArrayLike, meas: ArrayLike, what: str) -> tuple[NDArray[np.complex128],
+                                                                  NDArray[np.complex128]]:
+    a = np.asarray(model, dtype=complex).ravel()
+    b = np.asarray(meas, dtype=complex).ravel()
+    if a.shape != b.shape or a.size == 0:
+        raise InputError(f"{what}: model and measurement must have the same non-zero length",
+                         found=f"{a.size} and {b.size}")
+    if np.any(b == 0):
+        raise InputError(f"{what}: measured values must be non-zero")
+    return a, b
+
+
+def mape_pct(z_model: ArrayLike, z_meas: ArrayLike) -> float:
+    """Mean absolute percentage error of the magnitudes (see module docstring)."""
+    a, b = _pair(z_model, z_meas, "mape_pct")
+    return float(np.mean(np.abs((np.abs(a) - np.abs(b)) / np.abs(b))) * 100.0)
+
+
+def band_mape_pct(freq_hz: ArrayLike, z_model: ArrayLike, z_meas: ArrayLike,
+                  edges_hz: ArrayLike) -> list[float | None]:
+    """:func:`mape_pct` in each band ``[edges[i], edges[i+1])`` (None for an empty band)."""
+    f = np.asarray(freq_hz, dtype=float).ravel()
+    a, b = _pair(z_model, z_meas, "band_mape_pct")
+    e = np.asarray(edges_hz, dtype=float)
+    out: list[float | None] = []
+    for lo, hi in itertools.pairwise(e):
+        sel = (f >= lo) & ((f < hi) | ((hi == e[-1]) & (f <= hi)))
+        out.append(mape_pct(a[sel], b[sel]) if np.any(sel) else None)
+    return out
+
+
+def coherence_coefficient(z_model: ArrayLike, z_meas: ArrayLike) -> float:
+    """FRAC of the responses normalised by ``|Z_meas|`` (see module docstring), in [0, 1]."""
+    a, b = _pair(z_model, z_meas, "coherence_coefficient")
+    an = a / np.abs(b)
+    bn = b / np.abs(b)
+    den = float(np.sum(np.abs(an) ** 2) * np.sum(np.abs(bn) ** 2))
+    return float(abs(np.vdot(bn, an)) ** 2 / den) if den > 0 else 0.0
+
+
+def peak_v(u: ArrayLike, fs: float, *, f_cut_hz: float = F_CUT_HZ,
+           filtered: bool = False) -> float:
+    """``max |u|`` after the brickwall filter (``filtered=True``: ``u`` already filtered)."""
+    x = np.asarray(u, dtype=float)
+    if not filtered:
+        x = brickwall_filter(x, fs, f_cut_hz)
+    return float(np.max(np.abs(x)))
+
+
+def peak_errors(peak_model: float, peak_meas: float) -> tuple[float, float]:
+    """``(abs_err_v, rel_err_pct)`` of a predicted peak."""
+    err = abs(peak_model - peak_meas)
+    return float(err), float(100.0 * err / peak_meas) if peak_meas > 0 else float("inf")
+
+
+def spectral_corr(u_model: ArrayLike, u_meas: ArrayLike, fs: float, *,
+                  f_max_hz: float = F_CUT_HZ) -> float:
+    """Pearson correlation of ``|FFT|`` of two records over the bins 0..``f_max_hz``."""
+    a = np.asarray(u_model, dtype=float)
+    b = np.asarray(u_meas, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise InputError("spectral_corr: records must be 1-D of the same length",
+                         found=f"{a.shape} and {b.shape}")
+    freq = sfft.rfftfreq(a.size, 1.0 / fs)
+    sel = freq <= f_max_hz
+    ma = np.abs(sfft.rfft(a))[sel]
+    mb = np.abs(sfft.rfft(b))[sel]
+    if np.std(ma) == 0 or np.std(mb) == 0:
+        return 0.0
+    return float(np.corrcoef(ma, mb)[0, 1])

@@ -1,0 +1,209 @@
+"""The ``reproduce`` job: the reference paper's pipeline on a dataset (CONTRACT sections 3, 6).
+
+identify the grey-box network (:func:`vfmodel.greybox.identify.identify`) -> validate it
+(impedance MAPE and coherence coefficient, bearing-voltage peak errors and spectral
+correlation per speed, :mod:`vfmodel.greybox.metrics`) -> the classical BVR model
+(:mod:`vfmodel.greybox.bvr_baseline`) -> black box vs grey box
+(:mod:`vfmodel.greybox.blackbox`) -> the identified network of each speed as an ngspice
+netlist. Returns values; writing files is the caller's (CLI) job.
+
+``results.json`` holds the keys of CONTRACT section 6 (definitions in
+:mod:`vfmodel.greybox.metrics`) and more: ``bearing.<rpm>.lubricant`` is the equivalent
+film of one bearing (:func:`vfmodel.greybox.identify.film_equivalent`: ``r_ohm`` its DC
+resistance, ``c_f`` its capacitance); at standstill the metallic contact shorts the film and
+both are reported as 0. ``model`` holds the identified parameters, their relative standard
+uncertainties and the stages; ``blackbox`` the band errors of grey and black box;
+``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel.circuit.spice_export import to_spice
+from vfmodel.core.dataset import Dataset
+from vfmodel.core.progress import Progress, no_progress
+from vfmodel.errors import InputError
+from vfmodel.greybox.assembly import divider_capacitances
+from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
+from vfmodel.greybox.bvr_baseline import BvrBaseline, bvr_baseline, predict_bvr
+from vfmodel.greybox.effects import PAPER_EFFECTS
+from vfmodel.greybox.identify import Identification, film_equivalent, identify
+from vfmodel.greybox.metrics import (
+    coherence_coefficient,
+    mape_pct,
+    peak_errors,
+    peak_v,
+    spectral_corr,
+)
+from vfmodel.signals.h1 import bvr as bvr_estimate
+
+__all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+
+def rpm_key(speed_rpm: float) -> str:
+    """Speed as a results.json key: ``'100'`` (integer speeds), else ``'%g'``."""
+    return str(round(speed_rpm)) if abs(speed_rpm - round(speed_rpm)) < 1e-9 else f"{speed_rpm:g}"
+
+
+@dataclass(frozen=True)
+class SpeedResult:
+    """Validation of one recording: filtered measurement, model and divider outputs."""
+
+    speed_rpm: float
+    fs: float
+    u_meas: ArrF
+    u_model: ArrF
+    u_bvr: ArrF
+    terminals: ArrF
+    baseline: BvrBaseline
+    bvr_freq_hz: ArrF
+    bvr_meas: ArrC
+    bvr_model: ArrC
+    h1_freq_hz: ArrF
+    h1_meas: ArrC
+    h1_model: ArrC
+
+
+@dataclass(frozen=True)
+class ReproduceResult:
+    """``results`` is the JSON document (CONTRACT section 6 keys and more)."""
+
+    results: dict[str, Any]
+    ident: Identification
+    speeds: tuple[SpeedResult, ...]
+    z_model: ArrC | None
+    blackbox: BlackBoxComparison | None
+    netlists: dict[str, str]
+
+
+def netlist_text(ident: Identification, speed_rpm: float) -> str:
+    """Flat ngspice netlist of the identified network at ``speed_rpm`` (no sources)."""
+    sf = next(s for s in ident.speeds if s.speed_rpm == speed_rpm)
+    circ = ident.spec.build(sf.params, sf.state)
+    title = (f"vfmodel grey-box network at {speed_rpm:g} rpm ({sf.state}; "
+             f"{ident.spec.n_sections} winding sections, {ident.spec.n_rungs} ladder rungs)")
+    usage = [
+        "* nodes: U V W terminals, 0 frame, SN NDE shaft end (u_B = v(SN))",
+        "* bearing transfer: add e.g. 'VU U 0 AC 1' 'VV V 0 AC 0' 'VW W 0 AC 0' and '.ac ...'",
+        "* impedance U-Frame: add 'IZ 0 U AC 1' and read v(U) (V, W open)",
+    ]
+    return to_spice(circ, title=title, extra_lines=usage)
+
+
+def _f(x: float) -> float:
+    return float(x) if np.isfinite(x) else 0.0
+
+
+def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
+              sections: Sequence[int] = (2, 3, 4), blackbox: bool = True,
+              max_nfev: int = 40, progress: Progress = no_progress) -> ReproduceResult:
+    """Run the paper's pipeline on ``dataset`` (see the module docstring)."""
+    if not dataset.impedance:
+        raise InputError("reproduce needs impedance spectra", source=dataset.name,
+                         expected="an [impedance] table in dataset.toml")
+    if not dataset.recordings:
+        raise InputError("reproduce needs recordings", source=dataset.name,
+                         expected="[[recording]] entries in dataset.toml")
+    ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
+                     progress=progress)
+    eff = ident.spec.effects
+    res: dict[str, Any] = {"dataset": dataset.name}
+    # ---- impedance (Table II)
+    z_model = None
+    if ident.impedance is not None:
+        t = ident.impedance
+        z_model = t.model(ident.params)
+        imp: dict[str, Any] = {}
+        mapes, cohs = [], []
+        for i, topo in enumerate(t.topologies):
+            m = mape_pct(z_model[:, i], t.z_meas[:, i])
+            c = coherence_coefficient(z_model[:, i], t.z_meas[:, i])
+            imp[topo] = {"mape_pct": m, "coherence": c}
+            mapes.append(m)
+            cohs.append(c)
+        imp["mean_mape_pct"] = float(np.mean(mapes))
+        imp["mean_coherence"] = float(np.mean(cohs))
+        res["impedance"] = imp
+    # ---- bearing voltage (Table III) and baseline (Table IV)
+    dc = divider_capacitances(ident.params, eff)
+    bearing: dict[str, Any] = {}
+    base: dict[str, Any] = {"c_wr_f": dc["c_wr"], "c_rf_f": dc["c_rf"]}
+    speeds: list[SpeedResult] = []
+    rel_rot, corr_all = [], []
+    n_sp = len(ident.speeds)
+    for k, sf in enumerate(ident.speeds):
+        progress("validation", k, n_sp)
+        term = sf.term
+        prep = term.prep
+        u_model = term.output(sf.params)
+        pk_meas = peak_v(prep.bearing, prep.fs, filtered=True)
+        pk_model = peak_v(u_model, prep.fs, filtered=True)
+        abs_err, rel_err = peak_errors(pk_model, pk_meas)
+        corr = spectral_corr(u_model, prep.bearing, prep.fs)
+        lub = film_equivalent(sf.params, eff) if sf.state == "rotating" else \
+            {"r_ohm": 0.0, "c_f": 0.0}
+        key = rpm_key(sf.speed_rpm)
+        entry: dict[str, Any] = {
+            "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
+            "rel_err_pct": _f(rel_err), "spectral_corr": corr, "lubricant": lub,
+            "state": sf.state,
+        }
+        if sf.report is not None:
+            entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
+            entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
+        bearing[key] = entry
+        if sf.state == "rotating":
+            rel_rot.append(rel_err)
+        corr_all.append(corr)
+        # baseline
+        bl = bvr_baseline(dc["c_wr"], dc["c_rf"], prep.terminals, prep.bearing)
+        u_bvr = predict_bvr(bl, prep.terminals)
+        pk_b = peak_v(u_bvr, prep.fs, filtered=True)
+        _, rel_b = peak_errors(pk_b, pk_meas)
+        base[key] = {"bvr": bl.bvr, "c_b_f": bl.c_b_f, "peak_model_v": pk_b,
+                     "rel_err_pct": _f(rel_b), "bvr_average": bl.bvr_average}
+        # BVR(f) (Fig. 11) measured and modelled, same estimator
+        tu, tv, tw = prep.terminals
+        nps = prep.h1.nperseg * prep.n_samples // prep.n_h1   # same segment duration
+        bm = bvr_estimate(tu, tv, tw, prep.bearing, prep.fs, nperseg=nps)
+        bmod = bvr_estimate(tu, tv, tw, u_model, prep.fs, nperseg=nps)
+        speeds.append(SpeedResult(
+            sf.speed_rpm, prep.fs, prep.bearing, u_model, u_bvr, prep.terminals, bl,
+            bm.freq_hz, bm.bvr, bmod.bvr, term.freq_hz, term.h_meas,
+            term.h1_model(sf.params)))
+    progress("validation", n_sp, n_sp)
+    if rel_rot:
+        bearing["mean_rel_err_pct_rotating"] = float(np.mean(rel_rot))
+    bearing["mean_spectral_corr"] = float(np.mean(corr_all))
+    res["bearing"] = bearing
+    res["baseline_bvr"] = base
+    res["greybox_beats_baseline"] = {
+        rpm_key(s.speed_rpm): bool(bearing[rpm_key(s.speed_rpm)]["rel_err_pct"]
+                                   < base[rpm_key(s.speed_rpm)]["rel_err_pct"])
+        for s in speeds}
+    # ---- identification summary
+    res["model"] = {
+        **ident.spec.to_json_dict(),
+        "params": ident.params.as_dict(),
+        "rel_std": {n: _f(v) for n, v in ident.machine_rel_std.items()},
+        "stages": [{"name": s.name, "chi2_red": s.chi2_red, "nfev": s.nfev,
+                    "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],
+        "speeds": {rpm_key(s.speed_rpm): {"state": s.state, "params": s.params.as_dict()}
+                   for s in ident.speeds},
+    }
+    bb = None
+    if blackbox:
+        bb = compare_blackbox(ident, progress=progress)
+        res["blackbox"] = bb.to_json_dict()
+    netlists = {f"network_{rpm_key(s.speed_rpm)}rpm.cir": netlist_text(ident, s.speed_rpm)
+                for s in ident.speeds}
+    return ReproduceResult(res, ident, tuple(speeds), z_model, bb, netlists)
