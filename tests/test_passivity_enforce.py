@@ -32,16 +32,10 @@ def _certify_random(seed: int, cases: list[tuple[str, int, bool]]) -> None:
     assert max(iterations) <= 30
 
 
-@pytest.mark.slow
 def test_enforcement_50_random_models_certified() -> None:
-    # issue 4: 50 random non-passive models, Z, Y, S, 1-4 ports (minutes on a busy machine)
+    # issue 4: 50 random non-passive models, Z, Y, S, 1-4 ports, every fifth with singular
+    # D + D^T (Z, Y) resp. a unit singular value of D (S); about 20 s
     _certify_random(99, [("ZYS"[i % 3], 1 + (i // 3) % 4, i % 5 == 4) for i in range(50)])
-
-
-def test_enforcement_random_small_models_certified() -> None:
-    # the fast share of the above: Z, Y, S with 1 and 2 ports, regular and singular D
-    cases = [(k, n, sing) for k in "ZYS" for n in (1, 2) for sing in (False, True)]
-    _certify_random(7, cases)
 
 
 def test_enforcement_keeps_data_fit_and_reports_rms_change() -> None:

@@ -3,6 +3,7 @@ in the time domain (the energy it returns never exceeds what it absorbed)."""
 
 from __future__ import annotations
 
+import functools
 import warnings
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from scipy import signal
 
 import vfmodel
 from vfmodel import FrequencyData, RationalModel, check_passivity, enforce_passivity
+from vfmodel.fitting.passivity import PassivityReport
 from vfmodel.fitting.vectfit import fit_errors
 
 REPO = Path(__file__).resolve().parents[1]
@@ -19,6 +21,16 @@ _DIRS = [REPO.parent / "shared" / "data" / "touchstone", REPO / "data" / "touchs
 TOUCHSTONE = next((d for d in _DIRS if d.is_dir()), _DIRS[0])
 
 
+# vector_fit settings per file. The CST file is fitted at a fixed order (the automatic
+# order is another helper's work in progress and gave 4 poles there); the Agilent file
+# with the automatic order (57 poles, as scikit-rf's auto_fit).
+_ORDER: dict[str, dict[str, object]] = {
+    "Agilent_E5071B.s4p": {"order": "auto"},
+    "cst_example_4ports.s4p": {"order": 20, "spacing": "log"},
+}
+
+
+@functools.cache
 def _fit(name: str) -> tuple[FrequencyData, RationalModel, float]:
     skrf = pytest.importorskip("skrf")
     path = TOUCHSTONE / name
@@ -27,41 +39,46 @@ def _fit(name: str) -> tuple[FrequencyData, RationalModel, float]:
     data = FrequencyData.from_network(skrf.Network(str(path)), kind="S", source=name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", vfmodel.errors.FitWarning)
-        model, report = vfmodel.vector_fit(data, order="auto")
+        model, report = vfmodel.vector_fit(data, **_ORDER[name])  # type: ignore[arg-type]
     return data, model, report.rms_error
 
 
-@pytest.mark.parametrize(
-    "name",
-    ["Agilent_E5071B.s4p", pytest.param("cst_example_4ports.s4p", marks=pytest.mark.slow)],
-)
+@functools.cache
+def _enforced(name: str) -> tuple[RationalModel, PassivityReport]:
+    data, model, _ = _fit(name)
+    return enforce_passivity(model, data, weighting="uniform")
+
+
+_FILES = [
+    "Agilent_E5071B.s4p",
+    pytest.param("cst_example_4ports.s4p", marks=pytest.mark.slow),
+]
+
+
+@pytest.mark.parametrize("name", _FILES)
 def test_touchstone_fit_made_passive(name: str) -> None:
-    data, model, rms_fit = _fit(name)
+    data, model, _ = _fit(name)
     before = check_passivity(model)
-    fixed, report = enforce_passivity(model, data)
-    # certified by the Hamiltonian test, and confirmed by 1e5-point sampling
-    assert report.passive and report.method == "hamiltonian"
-    assert not before.passive or report.iterations == 0
+    assert not before.passive  # the unconstrained fits violate passivity
+    fixed, report = _enforced(name)
+    # certified by the Hamiltonian test, and confirmed by 1e5-point sampling up to 3x the
+    # data's top frequency (sigma_max <= 1 up to rounding)
+    assert report.passive and report.method == "hamiltonian" and report.iterations >= 1
     f = np.linspace(0.0, 3 * data.freq_hz[-1], 100_000)
     sv = np.linalg.svd(fixed(f), compute_uv=False)[:, 0]
     assert sv.max() <= 1 + 1e-12
+
+
+@pytest.mark.parametrize("name", _FILES)
+def test_touchstone_rms_within_1_2x(name: str) -> None:
+    # issue 4: RMS error after enforcement at most 1.2x the unconstrained fit's
+    data, _, rms_fit = _fit(name)
+    fixed, _ = _enforced(name)
     rms_after = fit_errors(fixed, data)[0]
     assert rms_after == pytest.approx(
         np.sqrt(np.mean(np.abs(fixed(data.freq_hz) - data.values) ** 2)), rel=1e-12
     )
-    assert rms_after < 10 * rms_fit
-
-
-@pytest.mark.parametrize(
-    "name",
-    ["Agilent_E5071B.s4p", pytest.param("cst_example_4ports.s4p", marks=pytest.mark.slow)],
-)
-def test_touchstone_rms_within_1_2x(name: str) -> None:
-    # issue 4: RMS error after enforcement at most 1.2x the unconstrained fit's
-    data, model, rms_fit = _fit(name)
-    fixed, report = enforce_passivity(model, data, weighting="uniform")
-    assert report.passive
-    assert fit_errors(fixed, data)[0] <= 1.2 * rms_fit
+    assert rms_after <= 1.2 * rms_fit
 
 
 # ---------------------------------------------------------------------- motor-like Z

@@ -63,19 +63,22 @@ ComplexArray = NDArray[np.complex128]
 _INTERIOR = 8  # cut frequencies inside each band of the Hamiltonian test
 _MAX_NEW = 60  # new cut frequencies per program at most (from the grid)
 _NEAR = 1
+_DROP = 0.05  # cuts with more slack than this (relative to the response) are dropped
 _ALL_BELOW = 0
-_COMBOS = False
+_COMBOS = True
+_MAX_TARGET = 1e-3  # deepest cut margin (relative)
 _GRID_LOG = 1500  # log-spaced grid points over the poles +- 2 decades
 # Tikhonov term relative to the objective's scale: keeps directions the data barely sees
 # (poles outside the data band) bounded and the program well conditioned
 _TIKHONOV = 1e-5
 # Objective forms and Clarabel settings tried in turn until one ends "optimal". The result
 # is certified by the Hamiltonian test, not by the solver.
+_TOL = {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}
 _ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
-    ("sumsq", {}),
+    ("sumsq", _TOL),
     ("norm", {}),
     ("sumsq", {"static_regularization_constant": 1e-7, "max_step_fraction": 0.95}),
-    ("norm", {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}),
+    ("norm", {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-6}),
 )
 
 
@@ -141,7 +144,7 @@ class _Setup:
         out[fin] = _basis(self.model.poles, 2j * np.pi * f_hz[fin], self.perturb_d)
         if self.perturb_d:
             out[~fin, -1] = 1.0
-        return out / self.col
+        return np.asarray(out / self.col, dtype=complex)
 
     def apply(self, x: FloatArray) -> RationalModel:
         """Model with the scaled parameters x (n * n * n_b,) added."""
@@ -173,30 +176,39 @@ def _margins(kind: str, h: ComplexArray) -> FloatArray:
     return np.asarray(np.linalg.eigvalsh(herm)[:, 0], dtype=float)
 
 
-def _pairs(left: ComplexArray, right: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
-    """Unit vector pairs for the cuts: the given columns and, when ``_COMBOS``, the mixtures
-    (a_i + w a_j) / sqrt 2, w in {1, -1, j, -j}, of every two of them (a polyhedral
-    approximation of the low subspace; cuts of the eigenvectors alone rotate slowly)."""
-    if not _COMBOS or left.shape[1] < 2:
-        return left, right
-    cols_l, cols_r = [left], [right]
-    for i in range(left.shape[1]):
-        for j in range(i + 1, left.shape[1]):
-            for w in (1.0, -1.0, 1j, -1j):
-                cols_l.append(((left[:, i] + w * left[:, j]) / np.sqrt(2))[:, None])
-                cols_r.append(((right[:, i] + w * right[:, j]) / np.sqrt(2))[:, None])
+def _pairs(
+    left: ComplexArray, right: ComplexArray, low: NDArray[np.bool_]
+) -> tuple[ComplexArray, ComplexArray]:
+    """Unit vector pairs for the cuts at one frequency: the low columns (eigenvectors or
+    singular pairs) and, when several are low, their mixtures (a_i + w a_j) / sqrt 2,
+    w in {1, -1, j, -j}: near a matrix with several active eigenvalues (e.g. a nearly
+    lossless S, all singular values at one) the supporting hyperplanes form a family that
+    the vectors alone sample too coarsely."""
+    lo_l, lo_r = left[:, low], right[:, low]
+    cols_l, cols_r = [lo_l], [lo_r]
+    if _COMBOS:
+        for i in range(lo_l.shape[1]):
+            for j in range(i + 1, lo_l.shape[1]):
+                for w in (1.0, -1.0, 1j, -1j):
+                    cols_l.append(((lo_l[:, i] + w * lo_l[:, j]) / np.sqrt(2))[:, None])
+                    cols_r.append(((lo_r[:, i] + w * lo_r[:, j]) / np.sqrt(2))[:, None])
     return np.hstack(cols_l), np.hstack(cols_r)
 
 
 def _cuts(
-    setup: _Setup, current: RationalModel, f_hz: FloatArray, h_orig: ComplexArray
+    setup: _Setup,
+    current: RationalModel,
+    f_hz: FloatArray,
+    h_orig: ComplexArray,
+    target: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
     """Cuts ``A x >= b`` at frequencies ``f_hz`` from the current model's vectors.
 
     Z, Y: Re(v^H (H0 + dH) v) >= margin * size for the eigenvectors v of the Hermitian part
     of the current model with eigenvalue below 10 margin * size (size = ||H0||_2 floored);
     S: Re(u^H (H0 + dH) v) <= 1 - margin for the singular pairs with sigma above
-    1 - 10 margin. Every row is divided by the size, so all rows are O(1).
+    1 - 10 margin. Every row is divided by the size, so all rows are O(1). ``target`` is
+    the margin required per frequency (>= margin; raised where cuts keep being violated).
     """
     n, h0 = setup.n, setup.h0
     h_cur = _response(current, f_hz) / h0
@@ -217,7 +229,7 @@ def _cuts(
     rows: list[FloatArray] = []
     rhs: list[FloatArray] = []
     for k in np.flatnonzero(np.any(low, axis=1)):
-        a, b = _pairs(u[k][:, low[k]], v_all[k][:, low[k]])
+        a, b = _pairs(u[k], v_all[k], low[k])
         # Re(a^H dH b) = sum_ij Re(conj(a_i) b_j dH_ij), dH_ij = phi @ x_ij
         c = np.conj(a)[:, None, :] * b[None, :, :]  # (n, n, n_vec)
         row = np.real(c[:, :, :, None] * phi[k][None, None, None, :])
@@ -225,13 +237,21 @@ def _cuts(
         lhs0 = np.real(np.einsum("iv,ij,jv->v", np.conj(a), h_orig[k], b))
         if s_kind:  # Re(a^H (H0 + dH) b) <= 1 - margin
             rows.append(-row)
-            rhs.append(-(1.0 - setup.margin - lhs0))
+            rhs.append(-(1.0 - target[k] - lhs0))
         else:  # Re(a^H (H0 + dH) a) >= margin * size
             rows.append(row / size[k])
-            rhs.append((setup.margin * size[k] - lhs0) / size[k])
+            rhs.append((target[k] * size[k] - lhs0) / size[k])
     if not rows:
         return np.zeros((0, n * n * setup.n_b)), np.zeros(0)
     return np.vstack(rows), np.concatenate(rhs)
+
+
+def _sizes(setup: _Setup, f_hz: FloatArray) -> FloatArray:
+    """Response size the margin is relative to: 1 (S) or ||H0(j w)||_2 floored (Z, Y)."""
+    if setup.model.kind == "S":
+        return np.ones(f_hz.size)
+    h = _response(setup.model, f_hz) / setup.h0
+    return np.maximum(np.linalg.norm(h, 2, axis=(1, 2)), setup.size_floor)
 
 
 def _band_points(bands: tuple[tuple[float, float], ...], worst: float | None) -> FloatArray:
@@ -253,17 +273,21 @@ def _band_points(bands: tuple[tuple[float, float], ...], worst: float | None) ->
 
 
 def _grid(model: RationalModel, f_data: FloatArray) -> FloatArray:
-    """Dense check grid (Hz): data, log grid over the poles, resonances, 0 and infinity."""
+    """Dense check grid (Hz): data, log grid over the poles, resonances and 0."""
     mags = np.abs(model.poles[np.abs(model.poles) > 0]) / (2 * np.pi)
     lo, hi = (mags.min(), mags.max()) if mags.size else (1.0, 1.0)
     pos = f_data[f_data > 0]
     if pos.size:
         lo, hi = min(lo, pos.min()), max(hi, pos.max())
-    parts = [f_data, np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, _GRID_LOG), [0.0]]
+    parts: list[FloatArray] = [
+        f_data,
+        np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, _GRID_LOG),
+        np.zeros(1),
+    ]
     for p in model.poles[model.poles.imag > 0]:
         parts.append((p.imag + abs(p.real) * np.linspace(-4, 4, 17)) / (2 * np.pi))
     g = np.unique(np.concatenate(parts))
-    return g[g >= 0]
+    return np.asarray(g[g >= 0], dtype=float)
 
 
 def _pick(f: FloatArray, m: FloatArray, bad: NDArray[np.bool_]) -> FloatArray:
@@ -392,30 +416,46 @@ def enforce(
     size_floor = 1e-3 * float(np.max(np.linalg.norm(h_grid, 2, axis=(1, 2)))) / h0
     d_size = max(float(np.linalg.norm(model.dd, 2)) / h0, size_floor)
     setup = _Setup(model, perturb_d, margin, h0, col, r_blocks, size_floor, d_size)
-    size = (
-        np.ones(grid.size)
-        if model.kind == "S"
-        else np.maximum(np.linalg.norm(h_grid / h0, 2, axis=(1, 2)), size_floor)
-    )
 
     h_model_data = model(f)
     current = model
     a_all = np.zeros((0, n * n * setup.n_b))
     b_all = np.zeros(0)
-    m0 = _margins(model.kind, h_grid / h0) / size
-    cut_f = np.concatenate([_band_points(first.bands_hz, first.worst_freq_hz), _pick(grid, m0, m0 < 0)])
+    pool = np.zeros(0)  # every cut frequency so far (Hz)
+    hits: dict[float, int] = {}
+    new_f = _band_points(first.bands_hz, first.worst_freq_hz)
     report = first
     for it in range(1, max_iter + 1):
-        cut_f = np.unique(cut_f)
-        a_new, b_new = _cuts(setup, current, cut_f, _response(model, cut_f))
+        pool = np.union1d(pool, new_f)
+        extra = np.setdiff1d(new_f, grid)
+        if it == 1 or extra.size:
+            grid = np.union1d(grid, extra)
+            size = _sizes(setup, grid)
+        if it == 1:
+            m_grid = _margins(model.kind, _response(model, grid) / h0) / size
+            new_f = np.union1d(new_f, _pick(grid, m_grid, m_grid < 0))
+        # frequencies cut again get a deeper cut (10x the margin each time, at most
+        # _MAX_TARGET): a cutting plane at a curved boundary otherwise creeps towards it
+        for fk in new_f:
+            hits[fk] = hits.get(fk, -1) + 1
+        target = np.array([min(margin * 10.0 ** hits[fk], _MAX_TARGET) for fk in new_f])
+        target = np.maximum(target, margin)
+        a_new, b_new = _cuts(setup, current, new_f, _response(model, new_f), target)
         a_all, b_all = np.vstack([a_all, a_new]), np.concatenate([b_all, b_new])
         x_val = _solve(setup, a_all, b_all)
         current = setup.apply(x_val)
-        # cheap screen on the dense grid first; the Hamiltonian test certifies
+        # drop cuts far from active (they only cost solver time); a dropped cut that
+        # matters again is re-added from the grid screen below
+        keep = a_all @ x_val - b_all < _DROP
+        a_all, b_all = a_all[keep], b_all[keep]
+        # cheap screen on the dense grid first (the Hamiltonian test certifies): new cuts
+        # at the grid's violations, and again at earlier cut frequencies whose margin the
+        # rotation of the eigenvectors (singular vectors) left below half the target
         m_grid = _margins(model.kind, _response(current, grid) / h0) / size
         bad = m_grid < 0
+        recut = np.isin(grid, pool) & (m_grid < 0.5 * margin)
         if np.any(bad):
-            cut_f = _pick(grid, m_grid, bad)
+            new_f = np.union1d(_pick(grid, m_grid, bad), grid[recut])
             continue
         report = check_passivity(current, method="hamiltonian")
         if report.passive:
@@ -432,14 +472,7 @@ def enforce(
                 }
             )
             return current, final
-        cut_f = _band_points(report.bands_hz, report.worst_freq_hz)
-        grid = np.union1d(grid, cut_f[np.isfinite(cut_f)])
-        h_grid = _response(model, grid)
-        size = (
-            np.ones(grid.size)
-            if model.kind == "S"
-            else np.maximum(np.linalg.norm(h_grid / h0, 2, axis=(1, 2)), size_floor)
-        )
+        new_f = np.union1d(_band_points(report.bands_hz, report.worst_freq_hz), grid[recut])
     if report is first or report.passive:
         report = check_passivity(current, method="hamiltonian")
     raise PassivityError(

@@ -19,7 +19,7 @@ References
 .. [1] S. Boyd, V. Balakrishnan, P. Kabamba, Math. Control Signals Systems 2 (1989),
    doi:10.1007/BF02551387.
 .. [2] B. Gustavsen, A. Semlyen, "Enforcing passivity for admittance matrices approximated by
-   rational functions", IEEE Trans. Power Syst. 16(1) (2001), doi:10.1109/59.910780.
+   rational functions", IEEE Trans. Power Syst. 16(1) (2001), doi:10.1109/59.910778.
 .. [3] S. Grivet-Talocia, B. Gustavsen, "Passive Macromodeling: Theory and Applications",
    Wiley (2016), doi:10.1002/9781119140931.
 """
@@ -370,12 +370,14 @@ def enforce_passivity(
     """Make a stable Z, Y or S model passive with the smallest weighted change of its response.
 
     Residues (conjugate pairs kept conjugate) and, if ``perturb_d``, D are perturbed by a
-    convex program (cvxpy, Clarabel): minimise the weighted change of H on the data
-    frequencies subject to passivity at every constraint frequency (the band edges and
-    points inside and around each violation band found by the Hamiltonian test). The
-    constraints are exact (not linearised) at those frequencies; new violations between
-    them add constraint frequencies and the program is solved again from the original model
-    until the Hamiltonian test certifies passivity.
+    quadratic program (cvxpy, Clarabel): minimise the weighted change of H on the data
+    frequencies subject to linear cuts ``Re(v^H H v) >= margin`` (Z, Y; v an eigenvector
+    of the Hermitian part at a violating frequency) resp. ``Re(u^H H v) <= 1 - margin``
+    (S; u, v a singular pair) -- the linearised eigenvalue / singular value constraints of
+    Gustavsen, each an exact half space of the passive set -- plus the exact asymptotic
+    condition on D. Violations are found on a dense grid and by the Hamiltonian test; new
+    cuts are added and the program is solved again from the original model until the
+    Hamiltonian test certifies passivity.
 
     Parameters
     ----------
@@ -393,8 +395,8 @@ def enforce_passivity(
     max_iter : int
         Convex programs to solve at most before giving up.
     margin : float
-        Required margin at the constraint frequencies, relative: ``min eig(Re H) >=
-        margin * scale`` (Z, Y) or ``sigma_max(H) <= 1 - margin`` (S).
+        Required margin at the cut frequencies, relative: ``min eig(Re H) >=
+        margin * ||H||`` (Z, Y) or ``sigma_max(H) <= 1 - margin`` (S); in (0, 0.1).
 
     Returns
     -------
@@ -412,7 +414,8 @@ def enforce_passivity(
 
     References
     ----------
-    B. Gustavsen, A. Semlyen (2001), doi:10.1109/59.910780;
+    B. Gustavsen, A. Semlyen (2001), doi:10.1109/59.910778;
+    B. Gustavsen (2008), doi:10.1109/TPWRD.2007.915883;
     S. Grivet-Talocia, B. Gustavsen (2016), doi:10.1002/9781119140931.
     """
     from vfmodel.fitting._enforce import enforce
