@@ -28,7 +28,8 @@ def _step(title: str, argv: list[str]) -> None:
 def run(out: Path) -> None:
     data = REPO / "data"
     agilent = data / "touchstone" / "Agilent_E5071B.s4p"
-    _step("What a dataset holds", ["info", str(data / "small-example")])
+    bench = data / "pmsm40kw" if (data / "pmsm40kw").is_dir() else data / "small-example"
+    _step("What a dataset holds", ["info", str(bench)])
     _step("Touchstone S-parameters -> Z-parameter CSV",
           ["convert", str(agilent), str(out / "agilent_z.csv"), "--kind", "Z"])
     commands = set(cli.commands)
