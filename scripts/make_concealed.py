@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from vfmodel.core.atomic import atomic_directory
 from vfmodel.detective.candidates import make_candidate
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.detective.user_model import UserFamily, read_user_model
@@ -73,9 +72,7 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
         tp = tp.with_specs(cand.params).with_values(upd)
         applied = (cand,)
     z = fam.predict(applied, tp)
-    tmp = Path(tempfile.mkdtemp(prefix=out.name + ".", dir=out.parent))
-    tmp.chmod(0o755)
-    try:
+    with atomic_directory(out) as tmp:
         (tmp / "impedance").mkdir()
         for (name, *_), zz in zip(model.ports, z, strict=True):
             noise = z_noise * np.abs(zz) * (rng.standard_normal(n_freq)
@@ -84,12 +81,6 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
         (tmp / "truth.json").write_text(json.dumps(
             {"truth_params": tp.as_dict(), "effect": eff, "location": case["location"],
              "z_noise": z_noise, "seed": seed}, indent=1) + "\n")
-        if out.exists():
-            shutil.rmtree(out)
-        tmp.rename(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return {"kind": "user", "model": str(RC_MODEL.relative_to(ROOT)), "without": [],
             "effect": eff, "location": case["location"], "decoys": [],
             "expected": {"mismatch_found": eff is not None,

@@ -18,13 +18,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from vfmodel.core.atomic import atomic_directory
 from vfmodel.greybox.assembly import TOPOLOGY_PORTS, divider_capacitances
 from vfmodel.greybox.bench import (
     CableSpec,
@@ -82,9 +81,7 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
     inv, cable = InverterSpec(), CableSpec()
     scope = ScopeSpec(fs_hz=fs, n_periods=periods)
 
-    tmp = Path(tempfile.mkdtemp(prefix=out.name + ".", dir=out.parent))
-    tmp.chmod(0o755)
-    try:
+    with atomic_directory(out) as tmp:
         (tmp / "impedance").mkdir()
         (tmp / "recordings").mkdir()
         # ---- impedance spectra at standstill
@@ -159,12 +156,6 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
                               "full-band record; noise = white + EMI",
         }
         (tmp / "truth.json").write_text(json.dumps(summary, indent=1) + "\n")
-        if out.exists():
-            shutil.rmtree(out)
-        tmp.rename(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return summary
 
 
