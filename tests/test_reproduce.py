@@ -7,7 +7,6 @@ numbers on data/pmsm40kw come from scripts/bench_reproduce.py.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import ModuleType
@@ -16,6 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.conftest import load_script
 from vfmodel.circuit.ngspice import run_ac
 from vfmodel.circuit.spice_import import from_spice
 from vfmodel.cli.main import main
@@ -29,12 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _script() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("make_testbench",
-                                                  ROOT / "scripts" / "make_testbench.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("make_testbench")
 
 
 @pytest.fixture(scope="module")

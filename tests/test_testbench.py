@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import ModuleType
@@ -11,6 +10,7 @@ import numpy as np
 import pytest
 
 import vfmodel
+from tests.conftest import load_script
 from vfmodel.greybox.bench import CableSpec, InverterSpec, ScopeSpec, edge_spectrum, steady_state
 from vfmodel.greybox.truth import (
     build_truth_network,
@@ -24,12 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _script() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("make_testbench",
-                                                  ROOT / "scripts" / "make_testbench.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("make_testbench")
 
 
 _FAST = {"n_coils": 2, "n_rungs": 4}   # smaller truth network for the tests

@@ -36,6 +36,6 @@ def info(dataset: Path, as_json: bool) -> None:
     for r in summary["recordings"]:
         click.echo(
             f"  {r['speed_rpm']:6g} rpm  fs {r['fs_hz'] / 1e6:g} MS/s  {r['n_samples']} samples"
-            f"  {r['duration_s'] * 1e3:.4g} ms  peak u_B {r['peak_u_B_v']:.3g} V"
+            f"  {r['duration_s'] * 1e3:.4g} ms  raw peak u_B {r['peak_u_B_v']:.3g} V"
             f"  SNR u_B ~{r['snr_u_B_db']:.3g} dB, terminals ~{r['snr_terminals_db']:.3g} dB"
         )

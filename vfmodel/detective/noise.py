@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
+from vfmodel.signals.spectral import log_noise_sigma
 
 __all__ = ["SpectrumNoise", "h1_sigma", "second_difference_sigma", "spectrum_noise"]
 
@@ -47,12 +48,8 @@ class SpectrumNoise:
 
 
 def second_difference_sigma(values: ArrC) -> float:
-    """Noise std of ``Re/Im log H`` from the MAD of second differences on the grid."""
-    lz = np.log(np.asarray(values))
-    ph = np.unwrap(lz.imag)
-    d2 = np.concatenate([np.diff(lz.real, 2), np.diff(ph, 2)])
-    mad = float(np.median(np.abs(d2 - np.median(d2))))
-    return max(1.4826 * mad / np.sqrt(6.0), 1e-6)
+    """Noise std of ``Re/Im log H`` from second differences (floored at 1e-6)."""
+    return log_noise_sigma(values, floor=1e-6)
 
 
 def spectrum_noise(freq_hz: ArrF, values: ArrC, *, mismatch: float = 1.5,

@@ -41,6 +41,7 @@ from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
 from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.filters import brickwall_filter
 from vfmodel.signals.h1 import H1Result, h1_analysis
+from vfmodel.signals.spectral import log_noise_sigma
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
@@ -108,16 +109,9 @@ def log_map(params: ParamSet, names: Sequence[str], spec: NetSpec) -> LogMap:
 
 # ----------------------------------------------------------------------------- condition 1
 def noise_sigma_log(z: ArrC) -> float:
-    """Noise level (std of ``log Z`` per real component) from second differences.
-
-    For a response smooth on the frequency grid, the second difference of ``log Z`` is
-    noise with variance ``6 sigma^2``; the median absolute deviation makes resonances
-    (large but few second differences) harmless.
-    """
-    lz = np.log(z)
-    d2 = np.concatenate([np.diff(lz.real, 2), np.diff(lz.imag, 2)])
-    mad = float(np.median(np.abs(d2 - np.median(d2))))
-    return max(1.4826 * mad / np.sqrt(6.0), 1e-4)
+    """Noise level (std of ``log Z`` per real component), floored at 1e-4 so that noiseless
+    data keep finite weights; see :func:`vfmodel.signals.spectral.log_noise_sigma`."""
+    return log_noise_sigma(z, floor=1e-4)
 
 
 @dataclass(frozen=True)

@@ -11,21 +11,14 @@ from scipy import signal
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
+from vfmodel.signals.spectral import log_noise_sigma
 
 
 def spectrum_noise_pct(data: FrequencyData) -> float:
-    """Relative complex noise of a densely sampled spectrum, percent.
-
-    Second differences remove smooth variation; for independent complex noise of relative
-    standard deviation s, ``|d2|^2/|Z|^2`` is exponential with mean ``6 s^2``, so the median
-    gives ``s = sqrt(median / (6 ln 2))``. The median keeps resonances from biasing it.
-    Returns NaN for fewer than 5 points.
-    """
-    z = data.values[:, 0, 0]
-    if z.size < 5:
-        return float("nan")
-    d2 = (z[:-2] - 2 * z[1:-1] + z[2:]) / np.abs(z[1:-1])
-    return float(100 * np.sqrt(np.median(np.abs(d2) ** 2) / (6 * np.log(2))))
+    """Relative complex noise ``|dZ|/|Z|`` of a densely sampled spectrum, percent
+    (``sqrt(2)`` times :func:`~vfmodel.signals.spectral.log_noise_sigma`); NaN for fewer
+    than 5 points."""
+    return float(100 * np.sqrt(2) * log_noise_sigma(data.values[:, 0, 0]))
 
 
 def floor_snr_db(x: NDArray[np.float64], fs: float) -> float:
@@ -50,12 +43,14 @@ def coherence_snr_db(rec: Recording, f_max_hz: float = 10e6) -> float:
     is gamma^2 G_yy and the rest (1 - gamma^2) G_yy is noise; both are integrated up to
     ``f_max_hz``.
     """
-    from vfmodel.signals.h1 import h1_estimate
+    from vfmodel.signals.h1 import h1_analysis
 
     n = rec.n_samples
     nper = int(2 ** np.floor(np.log2(max(64, n // 16))))
-    f, _, coh = h1_estimate(rec.terminals, rec.bearing, rec.fs, nperseg=nper)
-    _, gyy = signal.welch(rec.bearing - np.mean(rec.bearing), fs=rec.fs, nperseg=nper)
+    res = h1_analysis(rec.terminals, rec.bearing, rec.fs, nperseg=nper)
+    f = res.freq_hz
+    coh = res.coherence.reshape(f.size, -1)[:, 0]  # one output: (n_f,)
+    gyy = res.gyy.reshape(f.size, -1)[:, 0]
     band = (f > 0) & (f <= f_max_hz)
     c = np.clip(coh[band], 0.0, 1.0)
     sig = float(np.sum(c * gyy[band]))

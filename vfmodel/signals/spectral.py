@@ -179,3 +179,21 @@ def cutoff_frequency(t_rise_s: float, t_fall_s: float) -> float:
             found=f"t_r={t_rise_s!r}, t_f={t_fall_s!r}",
         )
     return 1.0 / (np.pi * t)
+
+
+def log_noise_sigma(values: ArrayLike, floor: float = 0.0) -> float:
+    """Noise level of a densely sampled spectrum: std of ``Re log H`` and of ``Im log H``.
+
+    For a response smooth on the frequency grid, the second difference of ``log H`` (phase
+    unwrapped) is noise of variance ``6 sigma^2``; the median absolute deviation
+    (``sigma = 1.4826 MAD / sqrt 6``) keeps the few large differences at resonances from
+    biasing it. For small noise, ``sigma`` is the relative noise per real component; the
+    complex relative noise ``|dH|/|H|`` has std ``sqrt(2) sigma``. Returns at least
+    ``floor``; NaN for fewer than 5 points.
+    """
+    lz = np.log(np.asarray(values, dtype=complex).ravel())
+    if lz.size < 5:
+        return float("nan")
+    d2 = np.concatenate([np.diff(lz.real, 2), np.diff(np.unwrap(lz.imag), 2)])
+    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    return max(1.4826 * mad / np.sqrt(6.0), floor)
