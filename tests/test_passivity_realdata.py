@@ -13,6 +13,7 @@ from scipy import signal
 
 import vfmodel
 from vfmodel import FrequencyData, RationalModel, check_passivity, enforce_passivity
+from vfmodel.fitting.artifacts import find_artifacts
 from vfmodel.fitting.passivity import PassivityReport
 from vfmodel.fitting.vectfit import fit_errors
 
@@ -21,15 +22,10 @@ _DIRS = [REPO.parent / "shared" / "data" / "touchstone", REPO / "data" / "touchs
 TOUCHSTONE = next((d for d in _DIRS if d.is_dir()), _DIRS[0])
 
 
-# vector_fit settings per file. The CST file is fitted at a fixed order (the automatic
-# order is another helper's work in progress and gave 4 poles there); the Agilent file
-# with the automatic order (57 poles, as scikit-rf's auto_fit).
-_ORDER: dict[str, dict[str, object]] = {
-    "Agilent_E5071B.s4p": {"order": "auto"},
-    "cst_example_4ports.s4p": {"order": 20, "spacing": "log"},
-}
-
-
+# Both files with the automatic order. The CST file is fitted on its computed band only:
+# 40.1-60 MHz repeat the 40 MHz sample bit for bit (export padding) and two isolated
+# single-sample spikes (19.9 MHz: sigma_max 1.085; 30 MHz) get zero weight, as the fit job
+# does by default (vfmodel.fitting.artifacts). Errors count the spikes.
 @functools.cache
 def _fit(name: str) -> tuple[FrequencyData, RationalModel, float]:
     skrf = pytest.importorskip("skrf")
@@ -37,9 +33,13 @@ def _fit(name: str) -> tuple[FrequencyData, RationalModel, float]:
     if not path.exists():
         pytest.skip(f"{path} missing")
     data = FrequencyData.from_network(skrf.Network(str(path)), kind="S", source=name)
+    art = find_artifacts(data)
+    if art.found:
+        k = art.n_genuine
+        data = FrequencyData(data.freq_hz[:k], data.values[:k], kind="S", z0=data.z0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", vfmodel.errors.FitWarning)
-        model, report = vfmodel.vector_fit(data, **_ORDER[name])  # type: ignore[arg-type]
+        model, report = vfmodel.vector_fit(data, order="auto", exclude=art.spikes or None)
     return data, model, report.rms_error
 
 
@@ -49,10 +49,7 @@ def _enforced(name: str) -> tuple[RationalModel, PassivityReport]:
     return enforce_passivity(model, data, weighting="uniform")
 
 
-_FILES = [
-    "Agilent_E5071B.s4p",
-    pytest.param("cst_example_4ports.s4p", marks=pytest.mark.slow),
-]
+_FILES = ["Agilent_E5071B.s4p", "cst_example_4ports.s4p"]
 
 
 @pytest.mark.parametrize("name", _FILES)
@@ -79,6 +76,18 @@ def test_touchstone_rms_within_1_2x(name: str) -> None:
         np.sqrt(np.mean(np.abs(fixed(data.freq_hz) - data.values) ** 2)), rel=1e-12
     )
     assert rms_after <= 1.2 * rms_fit
+
+
+def test_cst_clean_samples_barely_change() -> None:
+    # the CST ratio above is dominated by the spike at 19.9 MHz; on the other samples the
+    # enforcement changes the response by less than 1e-4 of its RMS (0.50), i.e. < 5e-5
+    data, model, _ = _fit("cst_example_4ports.s4p")
+    fixed, _ = _enforced("cst_example_4ports.s4p")
+    ok = np.setdiff1d(np.arange(data.n_freq), find_artifacts(data).spikes)
+    assert ok.size == data.n_freq - 2
+    change = fixed(data.freq_hz[ok]) - model(data.freq_hz[ok])
+    assert float(np.sqrt(np.mean(np.abs(change) ** 2))) < 5e-5
+    assert np.linalg.norm(fixed.dd, 2) <= 1.0
 
 
 # ---------------------------------------------------------------------- motor-like Z

@@ -142,6 +142,27 @@ def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], st
     return w, "user"
 
 
+def _exclude(w: NDArray[np.float64], exclude: Any, n_freq: int) -> NDArray[np.float64]:
+    idx = np.asarray(exclude)
+    if idx.size == 0:
+        return w
+    if idx.ndim != 1 or not np.issubdtype(idx.dtype, np.integer) or np.any(
+        (idx < 0) | (idx >= n_freq)
+    ):
+        raise InputError(
+            "exclude must be sample indices",
+            source=_SRC,
+            place="exclude",
+            found=repr(exclude)[:80],
+            expected=f"integers in [0, {n_freq})",
+        )
+    w = w.copy()
+    w[idx] = 0.0
+    if np.unique(idx).size > n_freq - 3:
+        raise InputError("exclude leaves fewer than 3 samples", source=_SRC, place="exclude")
+    return w
+
+
 def _check_data(fd: FrequencyData) -> None:
     """Reject data no rational fit can represent meaningfully."""
     src = fd.source or _SRC
@@ -195,6 +216,7 @@ def vector_fit(
     tol: float = 1e-4,
     max_order: int | None = None,
     enforce_stability: bool = True,
+    exclude: NDArray[np.intp] | tuple[int, ...] | None = None,
 ) -> tuple[RationalModel, FitReport]:
     """Fit a rational model with common poles to every entry of a frequency response.
 
@@ -235,6 +257,10 @@ def vector_fit(
         Upper limit of the automatic order (default: what the data supports, at most 200).
     enforce_stability : bool
         Flip unstable poles (default True).
+    exclude : sequence of int, optional
+        Indices of samples given zero weight (e.g. the spikes found by
+        :func:`vfmodel.fitting.artifacts.find_artifacts`); the report's errors still count
+        them.
 
     Returns
     -------
@@ -265,6 +291,8 @@ def vector_fit(
     if not (np.isfinite(tol) and tol > 0):
         raise InputError("tol must be positive", found=repr(tol))
     w, wname = _weights(fd, weighting)
+    if exclude is not None:
+        w = _exclude(w, exclude, fd.n_freq)
     has_dc = bool(fd.freq_hz[0] == 0.0)
     n_extra = int(bool(fit_d)) + int(bool(fit_e))
     limit = _max_order(fd.n_freq, has_dc, n_extra)

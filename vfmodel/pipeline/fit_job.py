@@ -3,10 +3,17 @@
 Several spectra are fitted together with common poles as a block-diagonal model: file k
 contributes its ports to the block k (all files must share the frequency grid and, after
 conversion, the kind).
+
+By default samples that are not data are left out of the fit (with a
+:class:`~vfmodel.errors.FitWarning`): a trailing run repeating the last computed sample
+bit for bit (export padding) is dropped, and isolated single-sample spikes get zero weight
+(see :mod:`vfmodel.fitting.artifacts`). Errors are reported over the remaining samples,
+spikes included.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -16,14 +23,15 @@ from vfmodel._choices import Kind
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
-from vfmodel.errors import InputError
+from vfmodel.errors import FitWarning, InputError
+from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
 from vfmodel.fitting.vectfit import FitReport, fit_errors, vector_fit
 
 
 @dataclass(frozen=True)
 class FitJobResult:
-    """What the ``fit`` job produced."""
+    """What the ``fit`` job produced (``data``: the samples fitted, padding dropped)."""
 
     data: FrequencyData
     model: RationalModel
@@ -32,6 +40,7 @@ class FitJobResult:
     unconstrained_rel_rms_error: float
     rms_error: float
     rel_rms_error: float
+    artifacts: DataArtifacts | None = None
 
 
 def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> FrequencyData:
@@ -77,12 +86,30 @@ def run_fit(
     kind: Kind | None = None,
     weighting: Literal["uniform", "inv_abs", "inv_sqrt_abs"] = "uniform",
     passive: bool = False,
+    clean: bool = True,
     progress: Progress = no_progress,
 ) -> FitJobResult:
-    """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models."""
+    """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
+
+    ``clean``: leave export padding and isolated spikes out of the fit (module docstring).
+    """
     data = combine_spectra(spectra, kind)
+    art: DataArtifacts | None = None
+    spikes: tuple[int, ...] = ()
+    if clean:
+        art = find_artifacts(data)
+        if art.found:
+            warnings.warn(
+                f"{data.source or 'spectrum'}: {art.describe()}; left out of the fit",
+                FitWarning,
+                stacklevel=2,
+            )
+            k = art.n_genuine
+            data = FrequencyData(data.freq_hz[:k], data.values[:k], kind=data.kind,
+                                 z0=data.z0, labels=data.labels, source=data.source)
+            spikes = art.spikes
     progress("vector fit", 0, 2 if passive else 1)
-    model, report = vector_fit(data, order=order, weighting=weighting)
+    model, report = vector_fit(data, order=order, weighting=weighting, exclude=spikes or None)
     _, unconstrained_rel, _ = fit_errors(model, data)
     progress("vector fit", 1, 2 if passive else 1)
     pas: PassivityReport | None = None
@@ -100,4 +127,4 @@ def run_fit(
         progress("vector fit", 2, 2)
     rms, rel, _ = fit_errors(model, data)
     report = replace(report, rms_error=rms, rel_rms_error=rel)  # errors of the final model
-    return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel)
+    return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art)
