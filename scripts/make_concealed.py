@@ -1,14 +1,20 @@
 #!/usr/bin/env python
 """Write the concealed-effect datasets of the detective (``data/concealed/``).
 
-    .venv/bin/python scripts/make_concealed.py --out data/concealed [--only CASE] [--seed 0]
+    .venv/bin/python scripts/make_concealed.py [--out data/concealed] [--only CASE] [--seed 0]
+    .venv/bin/python scripts/make_concealed.py --seed 7 --unseen --out /tmp/unseen7
 
 Each case is a dataset generated with one effect present (small, under realistic noise)
 that the model the detective starts from lacks, or with nothing missing (null cases).
 ``cases.json`` lists per case: the model (``--model`` file or PMSM ``--without`` list),
 the concealed effect and its location, the decoys (named but absent from the data) and the
 expected result. Deterministic for a given seed. ``--seed N --unseen`` draws other truth
-values and effect sizes (the acceptance style "datasets never seen").
+values and effect sizes (the acceptance style "datasets never seen"; needs ``--out``).
+
+PMSM cases (:data:`vfmodel.greybox.concealed.PMSM_CASES`): each entry also holds ``size``
+(the effect's parameter values), ``proxy_chi2_red`` and ``proxy`` (calibration fit of the
+starting model to the noise-free truth, :func:`vfmodel.greybox.concealed.proxy_fit`; about
+20-60 s per case, ``--no-proxy`` skips it).
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +31,15 @@ from vfmodel.core.atomic import atomic_directory
 from vfmodel.detective.candidates import make_candidate
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.detective.user_model import UserFamily, read_user_model
+from vfmodel.greybox.concealed import (
+    PMSM_CASES,
+    BenchConfig,
+    ConcealedCase,
+    bearing_sigma,
+    generate,
+    proxy_fit,
+    write_case,
+)
 from vfmodel.greybox.params import ParamSet
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,13 +103,36 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
                          "findings": [] if eff is None else [[eff, case["location"]]]}}
 
 
+def make_pmsm_case(out: Path, case: ConcealedCase, seed: int, unseen: bool,
+                   proxy: bool = True) -> dict[str, object]:
+    """Write one PMSM case to ``out`` (atomically); returns its ``cases.json`` entry."""
+    cfg = BenchConfig()
+    data = generate(case, seed, unseen, cfg)
+    entry = {**case.entry(), "seed": seed, "unseen": unseen, "size": data.size,
+             "note": case.note}
+    if proxy:
+        res = proxy_fit(case, data.params, bearing_sigma(data), cfg)
+        entry["proxy_chi2_red"] = round(res.chi2_red, 4)
+        entry["proxy"] = {k: (round(v, 4) if isinstance(v, float) else v)
+                          for k, v in res.to_json_dict().items()}
+        entry["proxy"]["blocks"] = {k: round(v, 4) for k, v in res.blocks.items()}
+    write_case(out, data, {"proxy": entry.get("proxy")})
+    return entry
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=str(ROOT / "data" / "concealed"))
+    ap.add_argument("--out", default=None, help="output directory (default data/concealed)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--unseen", action="store_true",
+                    help="other truth values, effect sizes (x0.7-1.5) and noise for --seed")
     ap.add_argument("--only", default=None, help="comma-separated case names")
+    ap.add_argument("--no-proxy", action="store_true",
+                    help="skip the calibration proxy fit (about 1 min per case)")
     a = ap.parse_args(argv)
-    out = Path(a.out)
+    if a.unseen and a.out is None:
+        ap.error("--unseen needs --out (data/concealed holds the committed cases)")
+    out = Path(a.out or ROOT / "data" / "concealed")
     out.mkdir(parents=True, exist_ok=True)
     only = set(a.only.split(",")) if a.only else None
     cases_path = out / "cases.json"
@@ -103,6 +142,17 @@ def main(argv: list[str] | None = None) -> int:
             continue
         cases[name] = make_user_case(out / name, case, a.seed * 1000 + k)
         print(f"wrote {out / name}", file=sys.stderr)
+    for pc in PMSM_CASES:
+        if only and pc.name not in only:
+            continue
+        t0 = time.perf_counter()
+        cases[pc.name] = make_pmsm_case(out / pc.name, pc, a.seed, a.unseen,
+                                        proxy=not a.no_proxy)
+        size = sum(p.stat().st_size for p in (out / pc.name).rglob("*") if p.is_file())
+        px = cases[pc.name].get("proxy_chi2_red", "-")
+        print(f"wrote {out / pc.name} ({size / 1e6:.2f} MB, {time.perf_counter() - t0:.1f} s, "
+              f"proxy chi2_red {px})", file=sys.stderr)
+        cases_path.write_text(json.dumps(cases, indent=1, sort_keys=True) + "\n")
     cases_path.write_text(json.dumps(cases, indent=1, sort_keys=True) + "\n")
     return 0
 
