@@ -81,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(v, dict):
             print(f"  {k:>5} rpm: peak meas {v['peak_measured_v']:.3f} V model "
                   f"{v['peak_model_v']:.3f} V  abs {v['abs_err_v']:.3f} V rel "
-                  f"{v['rel_err_pct']:.2f} %  corr {v['spectral_corr']:.4f}  | BVR model "
+                  f"{v['rel_err_pct']:.2f} %  corr {v['spectral_corr']:.4f}  resid rms "
+                  f"{v['residual_rms_v']:.4f} V | BVR model "
                   f"{base[k]['peak_model_v']:.3f} V rel {base[k]['rel_err_pct']:.1f} %  "
                   f"film R {v['lubricant']['r_ohm']:.3g} ohm C {v['lubricant']['c_f']:.3g} F")
     print(f"mean rel peak error rotating {bea.get('mean_rel_err_pct_rotating', float('nan')):.2f} %"
@@ -89,6 +90,20 @@ def main(argv: list[str] | None = None) -> int:
           f"{bea.get('0', {}).get('abs_err_v', float('nan')):.3f} V (target <= 0.08); "
           f"mean spectral corr {bea['mean_spectral_corr']:.4f} (target >= 0.95)")
     print(f"grey box beats BVR at every speed: {all(r['greybox_beats_baseline'].values())}")
+    truth_file = Path(a.dataset) / "truth.json"
+    if truth_file.is_file():
+        # virtual bench only: its noise-free peaks (never read by the pipeline)
+        import json
+
+        tr = json.loads(truth_file.read_text()).get("recordings", {})
+        for k, v in bea.items():
+            if isinstance(v, dict) and k in tr and "peak_u_b_clean_v" in tr[k]:
+                c = tr[k]["peak_u_b_clean_v"]
+                print(f"  diagnostic (bench truth.json, not used by the pipeline) {k:>4} rpm: "
+                      f"noise-free peak {c:.3f} V, model {v['peak_model_v']:.3f} V "
+                      f"({100 * (v['peak_model_v'] / c - 1):+.1f} %), measured "
+                      f"{v['peak_measured_v']:.3f} V ({100 * (v['peak_measured_v'] / c - 1):+.1f} %"
+                      f" from noise)")
     if a.ngspice:
         from vfmodel.circuit.ngspice import run_ac
         from vfmodel.circuit.spice_import import from_spice

@@ -11,6 +11,7 @@ import scipy.fft as sfft
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
+from vfmodel.errors import InputError
 from vfmodel.greybox._fast import transfer_on
 from vfmodel.greybox._h1op import h1_operator
 from vfmodel.greybox._network import NetSpec
@@ -60,6 +61,16 @@ def test_sections_keep_low_frequency_totals() -> None:
     # two sections = the paper's assembly, element for element
     ref = build_network(P0)
     assert np.array_equal(NetSpec(n_sections=2).build(P0).param_values, ref.param_values)
+    # NetSpec builds through build_network(n_sections=...): same elements and values
+    c4 = build_network(P0, n_sections=4)
+    s4 = NetSpec(n_sections=4).build(P0)
+    assert s4.param_names == c4.param_names
+    assert np.array_equal(s4.param_values, c4.param_values)
+    # 4 sections: 3 junctions per phase, each with a third of C_wf
+    cw = {e.name: e.value for e in c4.elements if e.name.startswith("insulation.wf.U.")}
+    assert cw["insulation.wf.U.1.C"] == pytest.approx(P0["winding.U.C_wf"] / 3, rel=1e-15)
+    with pytest.raises(InputError):
+        build_network(P0, n_sections=1)
     # same per-phase totals: CM capacitance and DM R + jwL agree at low frequency
     assert np.max(np.abs(z4 - z2) / np.abs(z2)) < 2e-3
 

@@ -57,7 +57,8 @@ def test_outputs_and_contract_keys(run: tuple[Path, Path, dict[str, Any]]) -> No
     for k in ("0", "200"):
         b = r["bearing"][k]
         assert set(b) >= {"peak_measured_v", "peak_model_v", "abs_err_v", "rel_err_pct",
-                          "spectral_corr", "lubricant"}
+                          "spectral_corr", "lubricant", "residual_rms_v"}
+        assert b["residual_rms_v"] > 0.0
         assert set(b["lubricant"]) == {"r_ohm", "c_f"}
         assert b["abs_err_v"] == pytest.approx(abs(b["peak_model_v"] - b["peak_measured_v"]))
         assert b["rel_err_pct"] == pytest.approx(100 * b["abs_err_v"] / b["peak_measured_v"])

@@ -25,12 +25,13 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
 
-from vfmodel._choices import BearingState
+from vfmodel._choices import BearingState, check_choice
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
@@ -45,6 +46,9 @@ from vfmodel.signals.spectral import log_noise_sigma
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
+
+H1Weighting = Literal["diagonal", "covariance"]
+"""Weighting of the condition-2 residual (:func:`bearing_term`)."""
 
 F_CUT_HZ = 10e6
 _LOG_STEP = 1e-6       # central-difference step of d log v / d log p
@@ -270,10 +274,19 @@ class BearingTerm:
     b: ArrF
     cout: ArrF
     spec: NetSpec
+    whiten: ArrC | None = None   # (n_fm, 3, 3) C^{-1/2} of "covariance" weighting, else None
+    bias: ArrC | None = None     # (n_fm, 3, 3) input-noise bias I - G_nn G_xx^-1, else None
 
     @property
     def n_residuals(self) -> int:
         return 2 * self.h_meas.size
+
+    def weigh(self, d: ArrC) -> ArrC:
+        """Normalised differences (..., n_fm, 3) of H1 values: ``d / sigma`` (diagonal
+        weighting) or ``C^{-1/2} d`` per bin (covariance weighting)."""
+        if self.whiten is None:
+            return np.asarray(d / self.sigma, dtype=complex)
+        return np.asarray(np.einsum("fij,...fj->...fi", self.whiten, d), dtype=complex)
 
     @property
     def freq_hz(self) -> ArrF:
@@ -289,11 +302,21 @@ class BearingTerm:
         return steady_output(self.transfer_bins(params), self.prep)
 
     def h1_model(self, params: ParamSet) -> ArrC:
-        """H1 of the model output (same estimator as the measurement, eq. 21)."""
-        return self.op.apply(steady_output(self.transfer_bins(params), self.prep, for_h1=True))
+        """H1 of the model output (same estimator as the measurement, eq. 21), with the
+        input-noise bias of the measured H1 applied when the term models it."""
+        return self.h1_of(steady_output(self.transfer_bins(params), self.prep, for_h1=True))
+
+    def h1_of(self, y: ArrF) -> ArrC:
+        """H1 (n_fm, 3) of output record(s) ``y`` (..., n_h1) from the measured inputs; with
+        ``bias`` the row vectors are multiplied by ``I - G_nn G_xx^-1`` (see
+        :func:`bearing_term`)."""
+        h = self.op.apply(y)
+        if self.bias is None:
+            return h
+        return np.asarray(np.einsum("...fi,fij->...fj", h, self.bias), dtype=complex)
 
     def _r(self, h1m: ArrC) -> ArrF:
-        d = (h1m - self.h_meas) / self.sigma
+        d = self.weigh(h1m - self.h_meas)
         return np.concatenate([d.real.ravel(), d.imag.ravel()])
 
     def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
@@ -337,7 +360,7 @@ class BearingTerm:
         dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
         dyb = np.einsum("jif,if->jf", dfine, self.prep.x_bins)
         dy = _resample(dyb, self.prep.n_samples, self.prep.n_h1)
-        dh1 = self.op.apply(dy) / self.sigma[None]                    # (n_p, n_fm, 3)
+        dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
         return r, np.ascontiguousarray(jm)
@@ -346,25 +369,136 @@ class BearingTerm:
 def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
                  state: BearingState, f_min_hz: float = 5e3,
                  f_max_hz: float = F_CUT_HZ, model_error: float = 0.02,
-                 min_coherence: float = 0.5) -> BearingTerm:
+                 min_coherence: float = 0.5,
+                 weighting: H1Weighting = "diagonal",
+                 input_noise: bool = False, max_input_noise: float = 0.2) -> BearingTerm:
     """Condition-2 term of one prepared recording.
 
     Bins from ``f_min_hz`` to ``f_max_hz`` where the H1 estimate is valid and the multiple
     coherence is at least ``min_coherence``; ``model_error`` is the relative error floor
     ``eps`` of ``sigma``.
+
+    ``weighting``: ``"diagonal"`` divides each component ``H_i`` by its own standard
+    uncertainty ``sigma_i`` (``h_std`` and the floor), ignoring the correlation of the
+    component errors. ``"covariance"`` whitens the three components of each bin with the
+    full covariance of the H1 estimate, ``C = s^2 conj(G_xx)^-1 / (n_eff - 3) + eps^2
+    diag(|H_i|^2)`` with the residual noise power ``s^2 = (1 - gamma^2) G_yy`` (Bendat &
+    Piersol, sec. 9.3); real and imaginary parts of the whitened residual then have unit
+    variance (with ``"diagonal"`` each has variance 1/2, the convention of ``h_std``). When
+    the inputs are strongly correlated (the common-mode part of
+    the terminal voltages dominates), the individual ``H_i`` are uncertain but their
+    common-mode combination is not, and only the full covariance keeps that information.
+    This matters at standstill, where the bearing voltage is near the noise level.
+
+    ``input_noise``: model the bias of the measured H1 caused by noise on the measured
+    terminal voltages (errors in the inputs). With input noise of spectral matrix
+    ``G_nn`` (independent channels, diagonal) the measured estimate is
+    ``H1 = H (G_xx - G_nn) G_xx^-1 = H (I - G_nn G_xx^-1)``, while the model output computed
+    from the same noisy inputs gives ``H`` exactly; the term therefore multiplies the
+    model's H1 by the same factor (Bendat & Piersol, sec. 9.2, bias of H1 by input noise).
+    ``G_nn`` is estimated by :func:`input_noise_psd` from a periodic record (the standstill
+    record: constant duty cycles, every PWM period alike); when the record is not
+    periodic the bias is not modelled. At standstill the terminal spectrum above ~7 MHz
+    is only a few dB above the probe noise and the uncorrected fit lowers the transfer
+    there (the ringing peak of the model then comes out ~10 % low). The correction is
+    first order and ``G_nn`` an estimate: bins where the input noise exceeds the fraction
+    ``max_input_noise`` of the power of any input (``G_nn,ii / G_xx,ii``) are dropped.
     """
+    check_choice("weighting", weighting, H1Weighting)
     h1 = prep.h1
     f = h1.freq_hz
     coh = np.nan_to_num(h1.coherence[:, 0])
     mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz) & (coh >= min_coherence)
     if mask.sum() < 10:
         mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz)
+    gnn = input_noise_psd(prep) if input_noise else None
+    if gnn is not None:
+        # the bias model is first order in G_nn / G_xx: drop the bins where the input noise
+        # is a sizable part of the input power (the top of the band at standstill)
+        gx = np.real(np.diagonal(h1.gxx, axis1=1, axis2=2)).T           # (3, n_f)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.max(gnn / gx, axis=0)
+        keep = mask & (ratio <= max_input_noise)
+        if keep.sum() >= 10:
+            mask = keep
     op = h1_operator(prep.terminals_h1, prep.fs_h1, h1, mask)
     hm = h1.h[mask, 0, :]
     sd = h1.h_std[mask, 0, :]
     sig = np.sqrt(sd**2 + (model_error * np.abs(hm)) ** 2)
     sig = np.maximum(sig, 1e-12 * np.max(np.abs(hm)))
+    whiten = None
+    if weighting == "covariance":
+        whiten = _whitening(h1, mask, hm, model_error)
+    bias: ArrC | None = None
+    if gnn is not None:
+        bias = np.asarray(np.eye(3)[None] - gnn[:, mask].T[:, :, None]
+                          * np.linalg.inv(h1.gxx[mask]), dtype=complex)
     mna = spec.build(params, state, sources=True).mna
     b = mna.input_matrix(list(SOURCES))
     cout = mna.output_matrix([BEARING_NODE])
-    return BearingTerm(prep, state, op, hm, sig, mna, b, cout, spec)
+    return BearingTerm(prep, state, op, hm, sig, mna, b, cout, spec, whiten, bias)
+
+
+def _whitening(h1: H1Result, mask: NDArray[np.bool_], hm: ArrC, eps: float) -> ArrC:
+    """``sqrt(2) C^{-1/2}`` (n_fm, 3, 3) of the H1 covariance plus the model-error floor
+    (see :func:`bearing_term`): real and imaginary parts of the whitened difference have
+    unit variance. Eigenvalues floored at ``1e-12`` of the largest of each bin."""
+    dof = max(h1.n_effective - hm.shape[1], 1.0)
+    s2 = (1.0 - np.nan_to_num(h1.coherence[mask, 0])) * h1.gyy[mask, 0] / dof   # (n_fm,)
+    # dH1 = G_nx G_xx^-1 with E[G_nx^H G_nx] = s^2 conj(G_xx) (per averaged segment):
+    # E[dH1_a dH1_b^*] = s^2 [conj(G_xx)^-1]_ab (the transpose of G_xx^-1)
+    cov = s2[:, None, None] * np.conj(np.linalg.inv(h1.gxx[mask]))
+    cov = 0.5 * (cov + np.conj(np.transpose(cov, (0, 2, 1))))
+    idx = np.arange(hm.shape[1])
+    cov[:, idx, idx] += (eps * np.abs(hm)) ** 2
+    w, v = np.linalg.eigh(cov)
+    w = np.maximum(w, 1e-12 * w[:, -1:])
+    # C is the covariance of the complex values; real and imaginary part of the whitened
+    # difference then each have variance 1/2: scale by sqrt(2) for unit variance
+    out = np.einsum("fik,fk,fjk->fij", v, np.sqrt(2.0 / w), v.conj())
+    return np.asarray(out, dtype=complex)
+
+
+def periodic_lines(prep: PreparedRecording, max_periods: int = 64,
+                   min_fraction: float = 0.9995) -> int:
+    """Number ``m`` of identical periods in the record (1 if it is not periodic).
+
+    A record of ``m`` identical periods has its spectrum on every ``m``-th FFT bin only.
+    ``m`` is the largest number up to ``max_periods`` for which those bins hold at least
+    ``min_fraction`` of the (filtered) terminal-voltage power above DC; the rest is noise.
+    """
+    pw = np.sum(np.abs(prep.x_bins[:, 1:]) ** 2, axis=0)
+    k = np.arange(1, prep.x_bins.shape[1])
+    tot = float(pw.sum())
+    best = 1
+    if tot <= 0:
+        return best
+    for m in range(2, max_periods + 1):
+        if float(pw[k % m == 0].sum()) >= min_fraction * tot:
+            best = m
+    return best
+
+
+def input_noise_psd(prep: PreparedRecording, smooth_hz: float = 200e3,
+                    min_periods: int = 4) -> ArrF | None:
+    """One-sided noise PSD (3, n_f) of the filtered terminal voltages on the H1 grid, or
+    None when the record is not periodic (:func:`periodic_lines` < ``min_periods``).
+
+    The bins between the lines of a periodic record hold only noise: their power
+    ``2 |X_k|^2 / (fs n)`` averaged over ``smooth_hz`` (moving mean) and interpolated onto
+    the H1 frequencies (same density scaling as ``h1.gxx``).
+    """
+    m = periodic_lines(prep)
+    if m < min_periods:
+        return None
+    fb = prep.bins_hz
+    k = np.arange(fb.size)
+    off = (k % m != 0) & (k > 0)
+    pw = 2.0 * np.abs(prep.x_bins) ** 2 / (prep.fs * prep.n_samples)
+    width = max(1, round(float(smooth_hz / (fb[1] - fb[0]))))
+    ker = np.ones(width)
+    num = np.stack([np.convolve(np.where(off, row, 0.0), ker, mode="same") for row in pw])
+    den = np.convolve(off.astype(float), ker, mode="same")
+    psd = num / np.maximum(den, 1.0)
+    f = prep.h1.freq_hz
+    return np.stack([np.interp(f, fb, row) for row in psd])

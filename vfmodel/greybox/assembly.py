@@ -5,7 +5,8 @@ Nodes: terminals ``U``, ``V``, ``W``; frame/housing = ground ``"0"``; ``F`` the 
 midpoints; shaft ``SM`` (rotor middle), ``SN`` (NDE end, bearing voltage ``u_B = v(SN)``),
 ``SD`` (DE end).
 
-Per phase ``p``: two winding sections ``p -> p_m -> N`` (:func:`winding_section`),
+Per phase ``p``: two winding sections ``p -> p_m -> N`` (:func:`winding_section`; more
+with ``n_sections``, see :func:`build_network`),
 terminal capacitance ``C_t`` (``p -> F``), winding-frame insulation (``p_m -> F``,
 ``C_wf``), winding-rotor insulation (``p_m -> SM``, ``C_wr``). Air gap ``SM -> F``
 (``C_rf``); frame ladder ``F -> 0``; shaft segments ``SM -> SN`` and ``SM -> SD``; NDE
@@ -31,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from vfmodel._choices import BearingState, Topology, check_choice
 from vfmodel.circuit.mna import CircuitTransfer
 from vfmodel.circuit.netlist import Circuit, Element
+from vfmodel.errors import InputError
 from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet, ParamSpec
 from vfmodel.greybox.substructures import (
@@ -140,7 +142,7 @@ def _pget(params: ParamSet | Mapping[str, float]) -> Mapping[str, float]:
 def build_network(params: ParamSet | Mapping[str, float],
                   effects: Iterable[str] = PAPER_EFFECTS,
                   state: BearingState = "standstill", *, n_rungs: int = 3,
-                  sources: bool = False) -> Circuit:
+                  n_sections: int = 2, sources: bool = False) -> Circuit:
     """The grey-box network as a :class:`Circuit`.
 
     Parameters
@@ -155,30 +157,52 @@ def build_network(params: ParamSet | Mapping[str, float],
         with ``metallic_contact``).
     n_rungs : int
         Rungs of every RL ladder.
+    n_sections : int
+        Winding sections per phase (>= 2). 2 is the paper's model (sections ``p -> p_m ->
+        N``, insulation at the midpoint ``p_m``). A winding is a distributed structure and
+        its discretisation order is a model-order choice like the rungs of a ladder: with
+        ``n`` sections each phase is a chain ``p -> p_m1 -> ... -> p_m(n-1) -> N`` of equal
+        sections with the same per-phase totals (section ``R_w / n``, ``L_w / n``,
+        ``2 R_p / n`` and ``n C_s / 2``, which is the paper's section for ``n = 2``), and the
+        winding-frame and winding-rotor insulation is spread equally over the ``n - 1``
+        junctions (``C / (n - 1)`` with ``(n - 1) R_ins`` each, so the totals and the leakage
+        are unchanged). The parameters do not change with ``n``.
     sources : bool
         Add unit voltage sources ``src.U``, ``src.V``, ``src.W`` from each terminal to frame.
     """
     eff = check_effects(effects)
     check_choice("state", state, BearingState)
+    if isinstance(n_sections, bool) or not isinstance(n_sections, int | np.integer) \
+            or n_sections < 2:
+        raise InputError("n_sections must be an integer >= 2", found=repr(n_sections),
+                         place="build_network")
     v = _pget(params)
+    n = int(n_sections)
     skin_w = "winding_skin_effect" in eff
     loss = "insulation_dielectric_loss" in eff
     els: list[Element] = []
-    ins = dict(r_ins=v["insulation.R_ins"], loss=loss, k_d=v["insulation.k_d"],
+    # each of the n - 1 junction insulations carries 1/(n - 1) of C and (n - 1) R_ins
+    ins = dict(r_ins=v["insulation.R_ins"] * (n - 1), loss=loss, k_d=v["insulation.k_d"],
                tau_d=v["insulation.tau_d"])
     for p in PHASES:
         g = f"winding.{p}"
-        mid = f"{p}_m"
-        sec = dict(r=v[f"{g}.R_w"] / 2, l_h=v[f"{g}.L_w"] / 2, r_p=v[f"{g}.R_p"],
-                   c_s=v[f"{g}.C_s"], skin=skin_w, l_frac=v["winding.skin_l_frac"],
+        # two sections: midpoint p_m (the paper's model); n: junctions p_m1 .. p_m(n-1)
+        mids = [f"{p}_m"] if n == 2 else [f"{p}_m{k}" for k in range(1, n)]
+        nodes = [p, *mids, "N"]
+        sec = dict(r=v[f"{g}.R_w"] / n, l_h=v[f"{g}.L_w"] / n, r_p=2 * v[f"{g}.R_p"] / n,
+                   c_s=n * v[f"{g}.C_s"] / 2, skin=skin_w, l_frac=v["winding.skin_l_frac"],
                    rho=v["winding.skin_rho"], n_rungs=n_rungs)
-        els += winding_section(f"{g}.s1", p, mid, **sec)  # type: ignore[arg-type]
-        els += winding_section(f"{g}.s2", mid, "N", **sec)  # type: ignore[arg-type]
+        for k in range(n):
+            els += winding_section(f"{g}.s{k + 1}", nodes[k], nodes[k + 1],
+                                   **sec)  # type: ignore[arg-type]
         els.append(capacitor(f"{g}.C_t", p, "F", v[f"{g}.C_t"]))
-        els += insulation(f"insulation.wf.{p}", mid, "F", c=v[f"{g}.C_wf"],
-                          **ins)  # type: ignore[arg-type]
-        els += insulation(f"insulation.wr.{p}", mid, "SM", c=v["insulation.C_wr"],
-                          **ins)  # type: ignore[arg-type]
+        for k, mid in enumerate(mids):
+            tag = p if n == 2 else f"{p}.{k + 1}"
+            els += insulation(f"insulation.wf.{tag}", mid, "F", c=v[f"{g}.C_wf"] / (n - 1),
+                              **ins)  # type: ignore[arg-type]
+            els += insulation(f"insulation.wr.{tag}", mid, "SM",
+                              c=v["insulation.C_wr"] / (n - 1), **ins)  # type: ignore[arg-type]
+    ins["r_ins"] = v["insulation.R_ins"]
     els += insulation("airgap", "SM", "F", c=v["airgap.C_rf"], **ins)  # type: ignore[arg-type]
     els += rl_branch("frame", "F", "0", skin="frame_skin_effect" in eff, r_dc=v["frame.R_dc"],
                      l_ext=v["frame.L_ext"], l_int=v["frame.L_int"], rho=v["frame.rho"],
@@ -211,17 +235,19 @@ def with_terminal_sources(circuit: Circuit) -> Circuit:
 
 def element_values(params: ParamSet | Mapping[str, float],
                    effects: Iterable[str] = PAPER_EFFECTS,
-                   state: BearingState = "standstill", *, n_rungs: int = 3) -> dict[str, float]:
+                   state: BearingState = "standstill", *, n_rungs: int = 3,
+                   n_sections: int = 2) -> dict[str, float]:
     """Element values of :func:`build_network` by element name (for ``Circuit.with_params``
     or ``MnaSystem.response(values=...)`` on a network compiled once)."""
-    c = build_network(params, effects, state, n_rungs=n_rungs)
+    c = build_network(params, effects, state, n_rungs=n_rungs, n_sections=n_sections)
     return dict(zip(c.param_names, c.param_values.tolist(), strict=True))
 
 
 def topology_impedance(params: ParamSet | Mapping[str, float], freq_hz: ArrayLike,
                        topologies: Sequence[str] = tuple(TOPOLOGY_PORTS),
                        effects: Iterable[str] = PAPER_EFFECTS, *, n_rungs: int = 3,
-                       circuit: Circuit | None = None) -> dict[str, ArrC]:
+                       circuit: Circuit | None = None,
+                       n_sections: int = 2) -> dict[str, ArrC]:
     """Impedance spectra of the measurement topologies at standstill (CONTRACT section 2).
 
     ``U-Frame``: between U and frame with V, W open; ``U-V``: between U and V with W open;
@@ -231,8 +257,8 @@ def topology_impedance(params: ParamSet | Mapping[str, float], freq_hz: ArrayLik
     eff = check_effects(effects)
     for t in topologies:
         check_choice("topology", t, Topology)
-    c = build_network(params, eff, "standstill", n_rungs=n_rungs) if circuit is None \
-        else circuit
+    c = build_network(params, eff, "standstill", n_rungs=n_rungs, n_sections=n_sections) \
+        if circuit is None else circuit
     f = np.asarray(freq_hz, dtype=float)
     pairs = [TOPOLOGY_PORTS[t] for t in topologies]
     z = c.mna.response(f, pairs, pairs)
@@ -248,9 +274,10 @@ def topology_impedance(params: ParamSet | Mapping[str, float], freq_hz: ArrayLik
 def bearing_transfer(params: ParamSet | Mapping[str, float],
                      effects: Iterable[str] = PAPER_EFFECTS,
                      state: BearingState = "rotating", *, n_rungs: int = 3,
-                     method: str = "auto") -> CircuitTransfer:
+                     method: str = "auto", n_sections: int = 2) -> CircuitTransfer:
     """``H(freq_hz) -> (n_f, 1, 3)``: terminal voltages (U, V, W to frame) -> ``v(SN)``."""
-    c = build_network(params, effects, state, n_rungs=n_rungs, sources=True)
+    c = build_network(params, effects, state, n_rungs=n_rungs, n_sections=n_sections,
+                      sources=True)
     return CircuitTransfer(c.mna, SOURCES, (BEARING_NODE,), method)  # type: ignore[arg-type]
 
 

@@ -12,9 +12,15 @@ transfer, see :mod:`._objective`):
    a model-order choice: candidates are fitted in increasing order while the reduced
    chi-square keeps falling by more than ``min_gain``, and the best is kept. Optional
    multistart (``n_starts``).
-2. ``standstill 0 rpm`` - conditions 1 and 2 together: the same parameters from the spectra
-   and the H1 transfer of the 0 rpm recording (metallic contact closed), which the paper
-   identifies together because both are taken at standstill;
+2. ``standstill 0 rpm`` - conditions 1 and 2 together: the same parameters (except
+   :data:`STANDSTILL_HIDDEN`, which the closed contact hides) from the spectra and the H1
+   transfer of the 0 rpm recording (metallic contact closed), which the paper identifies
+   together because both are taken at standstill. The bearing voltage is then near the
+   noise level (SNR ~1 dB) and the terminal spectrum near 10 MHz only a few dB above the
+   probe noise, so the H1 residual is whitened with the full covariance of the H1 estimate
+   and the model's H1 carries the bias that the input noise causes in the measured one
+   (:func:`vfmodel.greybox._objective.bearing_term`, ``weighting="covariance"``,
+   ``input_noise=True``);
 3. ``lubricant <rpm>`` - condition 2 at each rotating speed with every other parameter
    fixed: the lubricant film (``lubricant.*``), the Hertzian-contact resistance and the edge
    capacitance (contact switch open), from the previous speed's values and from the film
@@ -55,6 +61,7 @@ from vfmodel.errors import InputError
 from vfmodel.greybox._network import NetSpec
 from vfmodel.greybox._objective import (
     BearingTerm,
+    H1Weighting,
     ImpedanceTerm,
     PreparedRecording,
     bearing_term,
@@ -69,6 +76,7 @@ from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet
 
 __all__ = [
+    "STANDSTILL_HIDDEN",
     "Identification",
     "SpeedFit",
     "StageReport",
@@ -83,6 +91,14 @@ __all__ = [
 
 ArrF = NDArray[np.float64]
 Term = ImpedanceTerm | BearingTerm
+
+STANDSTILL_HIDDEN = ("airgap.C_rf", "bearing.C_air")
+"""Parameters the standstill data cannot separate: with the metallic contact closed the
+shaft is tied to the frame through the balls (tens of nH), in parallel with the air-gap
+capacitance (rotor-frame) and the bearings' air capacitance. The impedance spectra do not
+see them, the standstill H1 only in combination with the shaft and ball inductances, and a
+fit of them there trades them against those inductances (e.g. ``C_rf`` ten times too
+large); the rotating records, which need them, fit only the lubricant (paper Sec. III-C)."""
 
 
 @dataclass(frozen=True)
@@ -324,9 +340,12 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              sections: Sequence[int] = (2, 3, 4), n_rungs: int = 3,
              start: ParamSet | None = None, n_starts: int = 1, seed: int = 0,
              max_nfev: int = 40, weight_bearing: float = 1.0, fit_points: int = 201,
-             min_gain: float = 0.2, prior_sigma: float = 1.0, max_nfev_standstill: int = 12,
+             min_gain: float = 0.2, prior_sigma: float = 1.0, max_nfev_standstill: int = 30,
              prepared: dict[float, PreparedRecording] | None = None,
-             progress: Progress = no_progress) -> Identification:
+             progress: Progress = no_progress,
+             standstill_weighting: H1Weighting = "covariance",
+             input_noise: bool = True,
+             hold_standstill: Sequence[str] = STANDSTILL_HIDDEN) -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -360,6 +379,17 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         Recordings already prepared by :func:`prepare_recording`, by speed.
     progress : callable
         ``progress(stage, done, total)``.
+    standstill_weighting : "covariance" or "diagonal"
+        Weighting of the H1 residual of the standstill record (:func:`bearing_term`):
+        the full covariance of the three H1 components (default) or each component by
+        its own uncertainty. The rotating records always use ``"diagonal"``.
+    input_noise : bool
+        Model the bias of the standstill H1 by noise on the measured terminal voltages
+        (:func:`bearing_term`; only when the record is periodic).
+    hold_standstill : sequence of str
+        Parameters kept at their impedance-stage values in the standstill stage (default
+        :data:`STANDSTILL_HIDDEN`: the air-gap and bearing air capacitances, in parallel
+        with the closed metallic contact).
     """
     eff = check_effects(effects)
     if not dataset.impedance and not dataset.recordings:
@@ -417,18 +447,22 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     fits: list[SpeedFit] = []
     stand = [s for s in sorted(prep) if bearing_state(s, eff) == "standstill"]
     if stand:
-        term0 = bearing_term(prep[stand[0]], spec, p, "standstill")
+        term0 = bearing_term(prep[stand[0]], spec, p, "standstill",
+                             weighting=standstill_weighting, input_noise=input_noise)
         terms: list[tuple[Term, float]] = [(term0, weight_bearing)]
         if imp is not None:
             terms.insert(0, (imp_fit, 1.0))
-        p, rep = fit_stage(terms, p, names, f"standstill {stand[0]:g} rpm",
+        held = set(hold_standstill) if "metallic_contact" in eff else set()
+        p, rep = fit_stage(terms, p, [n for n in names if n not in held],
+                           f"standstill {stand[0]:g} rpm",
                            max_nfev=min(max_nfev, max_nfev_standstill),
                            prior_sigma=prior_sigma, progress=progress)
         stages.append(rep)
-        rel = rep.rel_std
+        rel = {**rel, **rep.rel_std}
     for s in stand:
-        fits.append(SpeedFit(s, "standstill", p, bearing_term(prep[s], spec, p, "standstill"),
-                             None))
+        fits.append(SpeedFit(s, "standstill", p, bearing_term(
+            prep[s], spec, p, "standstill", weighting=standstill_weighting,
+            input_noise=input_noise), None))
     lub = lubricant_names(p, eff)
     cur = p
     for s in sorted(prep):

@@ -11,7 +11,10 @@ netlist. Returns values; writing files is the caller's (CLI) job.
 :mod:`vfmodel.greybox.metrics`) and more: ``bearing.<rpm>.lubricant`` is the equivalent
 film of one bearing (:func:`vfmodel.greybox.identify.film_equivalent`: ``r_ohm`` its DC
 resistance, ``c_f`` its capacitance); at standstill the metallic contact shorts the film and
-both are reported as 0. ``model`` holds the identified parameters, their relative standard
+both are reported as 0. ``residual_rms_v`` is the RMS of measured minus modelled bearing
+voltage (filtered): at standstill it is mostly measurement noise, and the measured peak
+(the maximum of signal plus noise over many switching events) then exceeds the noise-free
+peak by a few times this value. ``model`` holds the identified parameters, their relative standard
 uncertainties and the stages; ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
@@ -155,7 +158,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         entry: dict[str, Any] = {
             "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
             "rel_err_pct": _f(rel_err), "spectral_corr": corr, "lubricant": lub,
-            "state": sf.state,
+            "state": sf.state, "residual_rms_v": float(np.std(prep.bearing - u_model)),
         }
         if sf.report is not None:
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
