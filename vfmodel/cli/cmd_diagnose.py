@@ -27,11 +27,13 @@ def _effects(value: str) -> tuple[str, ...]:
 @click.option("--model", "model", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="A user network (netlist with parameter bounds and .effect "
               "candidates; see vfmodel.detective.user_model) instead of the PMSM model.")
-@click.option("--max-nfev", default=60, show_default=True, type=click.IntRange(5, 1000),
-              help="Function evaluations per refit.")
+@click.option("--max-nfev", default=None, type=click.IntRange(5, 1000),
+              help="Function evaluations per refit (default: 60 for --model, 30 for the "
+              "PMSM model).")
 @out_option
 @quiet_option
-def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int, out_dir: Path,
+def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | None,
+             out_dir: Path,
              quiet: bool) -> None:
     """Fit the starting network to DATASET, locate where it disagrees with the data beyond
     the noise, try every effect it lacks, keep what the data support. Writes
@@ -44,7 +46,8 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int, out
         raise InputError("dataset directory not found", source=str(dataset))
     eff = _effects(without)
     prog = progress_bar(quiet)
-    res = run_diagnose(dataset, without=eff, model=model, progress=prog, max_nfev=max_nfev)
+    opts = {} if max_nfev is None else {"max_nfev": max_nfev}
+    res = run_diagnose(dataset, without=eff, model=model, progress=prog, **opts)
     out_dir.mkdir(parents=True, exist_ok=True)
     prog("figures", 0, 1)
     figs = write_diagnose_figures(res.family, res.diagnosis, out_dir)

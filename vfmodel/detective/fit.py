@@ -1,9 +1,10 @@
 """Refit of a candidate network: bounded least squares of the noise-normalised residual.
 
 Parameters are varied as ``x = log(value)`` inside their bounds (trust-region reflective
-least squares). The Jacobian is by forward differences of the family's prediction (one
-network solve per parameter; the networks the detective refits are small or compiled
-once). The fit statistics follow from the noise-normalised residual ``r``: ``chi2 = r.r``,
+least squares). The Jacobian is the family's own (``residual_jacobian(applied, params,
+names)``, e.g. adjoint sensitivities) when it has one, else forward differences of its
+prediction (one network solve per parameter). The fit statistics follow from the
+noise-normalised residual ``r``: ``chi2 = r.r``,
 ``chi2_red = chi2 / (m - k)``, the Bayesian information criterion ``BIC = chi2 + k ln m``
 (Gaussian noise of known variance, so ``-2 ln L = chi2`` up to a constant), and the
 Gauss-Newton covariance ``(J^T J)^-1`` of ``log p`` (standard deviations and correlations;
@@ -81,7 +82,11 @@ class FitResult:
 
 
 def evaluate(family: Family, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
-    """Noise-normalised residual of the network ``applied`` at ``params``."""
+    """Noise-normalised residual of the network ``applied`` at ``params`` (the family's
+    own ``residual(applied, params)`` when it has one, e.g. whitened transfer estimates)."""
+    own = getattr(family, "residual", None)
+    if own is not None:
+        return np.asarray(own(applied, params), dtype=float)
     return log_residual(family.channels, family.predict(applied, params))
 
 
@@ -120,7 +125,11 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
     def fun(x: ArrF) -> ArrF:
         return evaluate(family, applied, params.from_log(x, names))[sel]
 
+    analytic = getattr(family, "residual_jacobian", None)
+
     def jac(x: ArrF) -> ArrF:
+        if analytic is not None:
+            return np.asarray(analytic(applied, params.from_log(x, names), names)[1])[sel]
         r0 = fun(x)
         cols = []
         for j in range(x.size):

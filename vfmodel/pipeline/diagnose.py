@@ -2,8 +2,10 @@
 (CONTRACT section 7), the figures and ``report.html``.
 
 With ``model`` (a user network, :mod:`vfmodel.detective.user_model`) the dataset directory
-holds the port spectra the model names. The PMSM starting model (grey-box model minus
-``without``) is not wired in yet: without ``model`` an InputError says so.
+holds the port spectra the model names. Without it the dataset is a PMSM dataset (CONTRACT
+section 2) and the starting network is the paper's grey-box model minus ``without``
+(:mod:`vfmodel.detective.pmsm`); the bearing-voltage waveforms are then compared in time
+windows too (:mod:`vfmodel.detective.windows`).
 """
 
 from __future__ import annotations
@@ -95,6 +97,34 @@ def diagnosis_json(family: Family, d: Diagnosis) -> dict[str, Any]:
     }
 
 
+PMSM_OPTIONS: dict[str, Any] = {"max_nfev": 30, "heldout_nfev": 6, "n_starts": 1}
+"""Detective options for the PMSM family: its start is the staged grey-box identification
+(not a raw nominal start), so one start suffices; refits are warm-started."""
+
+
+def bearing_windows(family: Family, fit: FitResult, speeds: Iterable[str] | None = None
+                    ) -> list[dict[str, Any]]:
+    """Time windows of the bearing-voltage records where ``fit`` disagrees beyond the noise
+    (only the records named in ``speeds``, e.g. ``"bearing:100rpm"``; default all)."""
+    from vfmodel.detective.windows import noise_variance, time_windows
+    from vfmodel.greybox._objective import F_CUT_HZ
+
+    outputs = getattr(family, "outputs", None)
+    preps = getattr(family, "preps", ())
+    if outputs is None or not preps:
+        return []
+    ys = outputs(fit.applied, fit.params)
+    recs = []
+    for y, p in zip(ys, preps, strict=True):
+        where = f"bearing:{p.speed_rpm:g}rpm"
+        if speeds is not None and where not in set(speeds):
+            continue
+        recs.append((where, p.bearing - y, p.fs, noise_variance(p.h1, F_CUT_HZ)))
+    return [{"where": w.where, "t_s": [w.t_s[0], w.t_s[1]], "significance": w.significance,
+             "rms_ratio": w.rms_ratio}
+            for w in time_windows(recs, bandwidth_hz=F_CUT_HZ)]
+
+
 def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
                  model: str | Path | None = None, progress: Progress = no_progress,
                  **options: Any) -> DiagnoseResult:
@@ -109,9 +139,20 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
 
         fam = user_family(read_user_model(model), dataset)
     else:
-        # the PMSM family (grey-box model minus ``without`` on the six impedance topologies
-        # and the recordings) is not implemented yet
-        raise InputError("the PMSM starting model (--without) is not available yet in this "
-                         "version; give a user network with --model FILE", place="--model")
+        from vfmodel.core.io_dataset import read_dataset
+        from vfmodel.detective.pmsm import pmsm_family
+
+        fam = pmsm_family(read_dataset(dataset), without, progress=progress)
+        options = {**PMSM_OPTIONS, **options}
     d = diagnose(fam, progress=progress, **options)
-    return DiagnoseResult(fam, d, diagnosis_json(fam, d))
+    doc = diagnosis_json(fam, d)
+    if getattr(fam, "preps", ()):
+        flagged = {m.where.rsplit(":", 1)[0] for m in d.mismatches
+                   if m.where.startswith("bearing:")}
+        doc["time_windows"] = {"start": bearing_windows(fam, d.start, flagged),
+                               "final": bearing_windows(fam, d.final, flagged),
+                               "definition": "intervals of the 10 MHz-filtered bearing "
+                               "voltage where model minus recording exceeds the "
+                               "non-coherent (noise) power of the H1 analysis; only for "
+                               "records whose H1 transfer shows a mismatch"}
+    return DiagnoseResult(fam, d, doc)

@@ -64,7 +64,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
         axs[1].semilogx(f, np.angle(c.measured, deg=True), "k.", ms=3)
         axs[1].semilogx(f, np.angle(p0[k], deg=True), "-")
         axs[1].semilogx(f, np.angle(p1[k], deg=True), "--")
-        axs[0].set_ylabel("|Z| (ohm)")
+        axs[0].set_ylabel("|H1| (V/V)" if c.where.startswith("bearing:") else "|Z| (ohm)")
         axs[1].set_ylabel("phase (deg)")
         axs[1].set_xlabel("frequency (Hz)")
         axs[0].set_title(f"{c.where}: before/after", fontsize=9)
@@ -98,9 +98,42 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
         ax.set_title("poles: black box (what the data support) vs network", fontsize=9)
         save(fig, out / "poles.png")
         names.append("poles.png")
-    extra = getattr(family, "write_extra_figures", None)
-    if callable(extra):
-        names += list(extra(d, out))
+    names += _waveform_figures(family, d, out)
+    return names
+
+
+def _waveform_figures(family: Family, d: Diagnosis, out: Path) -> list[str]:
+    """Bearing-voltage waveforms (recording vs starting and final network), when the
+    family models recordings: the whole record and a zoom where the fix changes most."""
+    outputs = getattr(family, "outputs", None)
+    preps = getattr(family, "preps", ())
+    if outputs is None or not preps:
+        return []
+    plt = pyplot()
+    y0 = outputs(d.start.applied, d.start.params)
+    y1 = outputs(d.final.applied, d.final.params)
+    names = []
+    for p, a, b in zip(preps, y0, y1, strict=True):
+        t = np.arange(p.bearing.size) / p.fs
+        fig, axs = plt.subplots(2, 1, figsize=(8, 6))
+        k = int(np.argmax(np.abs(a - b))) if d.findings else int(np.argmax(np.abs(p.bearing)))
+        half = min(int(10e-6 * p.fs), t.size // 2)
+        z = slice(max(k - half, 0), min(k + half, t.size))
+        for ax, sl in ((axs[0], slice(None)), (axs[1], z)):
+            ax.plot(t[sl] * 1e6, p.bearing[sl], color="0.6", lw=0.6,
+                    label="recording (10 MHz filtered)")
+            ax.plot(t[sl] * 1e6, a[sl], "-", lw=1.0, label="starting network")
+            ax.plot(t[sl] * 1e6, b[sl], "--", lw=1.0, label="after the detective")
+            ax.set_ylabel("u_B (V)")
+            ax.grid(True, alpha=0.3)
+        axs[0].legend(fontsize=8)
+        axs[0].set_title(f"bearing voltage at {p.speed_rpm:g} rpm (steady state from the "
+                         "measured terminal voltages)", fontsize=9)
+        axs[1].set_title("zoom where the added physics changes the waveform most", fontsize=9)
+        axs[1].set_xlabel("time (us)")
+        name = f"waveform_bearing_{p.speed_rpm:g}rpm.png"
+        save(fig, out / name)
+        names.append(name)
     return names
 
 
@@ -120,10 +153,19 @@ def write_diagnose_html(path: Path, doc: dict[str, Any], figures: list[str]) -> 
         f"<tr><td>{e(f['effect'])}</td><td>{e(f['location'])}</td>"
         f"<td>{f['before']['chi2_red']:.3f} &rarr; {f['after']['chi2_red']:.3f}</td>"
         f"<td>{_fmt(f['before']['impedance_mape_pct'])} &rarr; "
-        f"{_fmt(f['after']['impedance_mape_pct'])}</td><td>{f['delta_bic']:.1f}</td>"
+        f"{_fmt(f['after']['impedance_mape_pct'])}</td><td>"
+        f"{_fmt(f['before']['bearing_rel_err_pct'])} &rarr; "
+        f"{_fmt(f['after']['bearing_rel_err_pct'])}</td><td>{f['delta_bic']:.1f}</td>"
         f"<td>{e(f['explanation'])} {e(f['note'])}</td></tr>" for f in doc["findings"])
     rej = "".join(f"<tr><td>{e(r['effect'])}</td><td>{e(r['location'])}</td>"
                   f"<td>{e(r['reason'])}</td></tr>" for r in doc["rejected"])
+    tw = doc.get("time_windows", {})
+    twrows = "".join(f"<tr><td>{e(w['where'])}</td><td>{w['t_s'][0] * 1e6:.2f} - "
+                     f"{w['t_s'][1] * 1e6:.2f}</td><td>{w['significance']:.1f}</td>"
+                     f"<td>{w['rms_ratio']:.2f}</td></tr>" for w in tw.get("start", [])[:20])
+    twtab = ("<h2>Bearing-voltage time windows beyond the noise (starting network)</h2>"
+             "<table><tr><th>record</th><th>t (us)</th><th>significance (z)</th>"
+             f"<th>RMS / noise RMS</th></tr>{twrows}</table>") if twrows else ""
     imgs = "".join(f'<figure><img src="{e(n)}" style="max-width:100%"><figcaption>{e(n)}'
                    "</figcaption></figure>" for n in figures)
     text = f"""<!DOCTYPE html>
@@ -140,7 +182,9 @@ table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;fo
 {rows}</table>
 <h2>Findings</h2>
 <table><tr><th>effect</th><th>location</th><th>chi2_red</th><th>MAPE %</th>
+<th>u_B peak error %</th>
 <th>Delta BIC</th><th>physics</th></tr>{finds}</table>
+{twtab}
 <h2>Rejected candidates</h2>
 <table><tr><th>effect</th><th>location</th><th>reason</th></tr>{rej}</table>
 <h2>Figures</h2>{imgs}

@@ -1,0 +1,96 @@
+#!/usr/bin/env python
+"""Run the discrepancy detective on every case of ``data/concealed`` and score it.
+
+    OMP_NUM_THREADS=1 .venv/bin/python scripts/bench_diagnose.py [--cases DIR] [--only A,B]
+        [--unseen SEED]
+
+For each case of ``cases.json`` (made by ``scripts/make_concealed.py``): the ``diagnose``
+job as the CLI runs it (``--without`` for PMSM cases, ``--model`` for user networks), its
+wall time, the findings against the expected ones, chi2_red before and after, and whether
+every decoy was rejected with a reason. ``--unseen SEED`` first writes a fresh set of cases
+with other truth values, effect sizes and noise (``make_concealed.py --seed SEED --unseen``)
+into a temporary directory and scores those. Prints one line per case and a summary; exit 1
+when a case fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def score(case: dict[str, Any], doc: dict[str, Any]) -> tuple[bool, str]:
+    """Whether the diagnosis matches the case's expectation, and why not."""
+    exp = case["expected"]
+    found = [[f["effect"], f["location"]] for f in doc["findings"]]
+    why = []
+    if bool(doc["mismatch_found"]) != bool(exp["mismatch_found"]):
+        why.append(f"mismatch_found {doc['mismatch_found']}")
+    if sorted(found) != sorted(exp["findings"]):
+        why.append(f"found {found}")
+    rejected = {r["effect"] for r in doc["rejected"] if r.get("reason")}
+    missing = [d for d in case.get("decoys", []) if d not in rejected]
+    if missing:
+        why.append(f"decoys not rejected: {missing}")
+    for f in doc["findings"]:
+        if not f["after"]["chi2_red"] < f["before"]["chi2_red"]:
+            why.append("chi2_red did not fall")
+    return not why, "; ".join(why)
+
+
+def run_case(root: Path, name: str, case: dict[str, Any]) -> tuple[dict[str, Any], float]:
+    from vfmodel.pipeline.diagnose import run_diagnose
+
+    t0 = time.perf_counter()
+    if case["kind"] == "user":
+        res = run_diagnose(root / name, model=ROOT / case["model"])
+    else:
+        res = run_diagnose(root / name, without=case["without"])
+    return res.document, time.perf_counter() - t0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", default=str(ROOT / "data" / "concealed"))
+    ap.add_argument("--only", default=None, help="comma-separated case names")
+    ap.add_argument("--unseen", type=int, default=None, help="score freshly made cases")
+    a = ap.parse_args(argv)
+    root = Path(a.cases)
+    tmp = None
+    if a.unseen is not None:
+        tmp = tempfile.TemporaryDirectory()
+        root = Path(tmp.name)
+        sys.path.insert(0, str(ROOT / "scripts"))
+        import make_concealed
+
+        make_concealed.main(["--out", str(root), "--seed", str(a.unseen), "--unseen"])
+    cases = json.loads((root / "cases.json").read_text())
+    only = set(a.only.split(",")) if a.only else None
+    ok_all = True
+    print(f"{'case':28s} {'ok':3s} {'time s':>7s} {'chi2 start':>10s} {'chi2 final':>10s}  "
+          "findings / problem")
+    for name, case in sorted(cases.items()):
+        if only and name not in only:
+            continue
+        doc, dt = run_case(root, name, case)
+        ok, why = score(case, doc)
+        ok_all &= ok
+        found = ", ".join(f"{f['effect']}@{f['location']}" for f in doc["findings"]) or "-"
+        print(f"{name:28s} {'yes' if ok else 'NO':3s} {dt:7.1f} "
+              f"{doc['start']['chi2_red']:10.3f} {doc['final']['chi2_red']:10.3f}  "
+              f"{found}{'  [' + why + ']' if why else ''}", flush=True)
+    if tmp is not None:
+        tmp.cleanup()
+    print("all cases correct" if ok_all else "SOME CASES FAILED")
+    return 0 if ok_all else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,131 @@
+"""The detective on the PMSM grey-box network (``vfmodel diagnose DATASET --without``).
+
+References: the concealed-effect benches of ``data/concealed`` (scripts/make_concealed.py,
+truth = the grey-box structure with the listed effects, cases.json says what is concealed
+and which decoys are named); white Gaussian noise for the time-window test.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.conftest import REPO
+from vfmodel.cli.main import main
+from vfmodel.detective.fit import evaluate
+from vfmodel.detective.windows import time_windows
+from vfmodel.pipeline.diagnose import DiagnoseResult, run_diagnose
+
+CASES = REPO / "data" / "concealed"
+CASE_LIST: dict[str, dict[str, Any]] = json.loads((CASES / "cases.json").read_text())
+PMSM = sorted(n for n, c in CASE_LIST.items() if c["kind"] == "pmsm")
+FAST_CONCEALED = "pmsm_insulation_loss"
+FAST_NULL = "pmsm_null"
+
+
+def _run(name: str) -> DiagnoseResult:
+    return run_diagnose(CASES / name, without=CASE_LIST[name]["without"])
+
+
+def _check_case(name: str, doc: dict[str, Any]) -> None:
+    case = CASE_LIST[name]
+    exp = case["expected"]
+    found = sorted([f["effect"], f["location"]] for f in doc["findings"])
+    assert doc["mismatch_found"] is exp["mismatch_found"], (name, doc["sentence"])
+    assert found == sorted(exp["findings"]), (name, doc["sentence"])
+    rejected = {r["effect"]: r["reason"] for r in doc["rejected"]}
+    for d in case["decoys"]:
+        assert d in rejected and len(rejected[d]) > 20, (name, d)
+    for f in doc["findings"]:
+        # clearly below before, close to 1 after (noise-normalised)
+        assert f["after"]["chi2_red"] < f["before"]["chi2_red"] - 0.05
+        assert 0.8 <= f["after"]["chi2_red"] <= 1.2, (name, f["after"])
+
+
+@pytest.fixture(scope="module")
+def concealed() -> DiagnoseResult:
+    return _run(FAST_CONCEALED)
+
+
+@pytest.fixture(scope="module")
+def null() -> DiagnoseResult:
+    return _run(FAST_NULL)
+
+
+def test_concealed_case_found_at_the_right_place(concealed: DiagnoseResult) -> None:
+    _check_case(FAST_CONCEALED, concealed.document)
+    # the report names the physics of the finding
+    f = concealed.document["findings"][0]
+    assert "dielectric" in f["explanation"].lower()
+    assert concealed.document["mismatches"], "a finding needs a located mismatch"
+
+
+def test_null_case_is_clean(null: DiagnoseResult) -> None:
+    _check_case(FAST_NULL, null.document)
+    assert 0.8 <= null.document["start"]["chi2_red"] <= 1.2
+
+
+def test_analytic_jacobian_matches_central_differences(null: DiagnoseResult) -> None:
+    fam = null.family
+    p = null.diagnosis.final.params
+    names = fam.free_names((), p)
+    r, jm = fam.residual_jacobian((), p, names)  # type: ignore[attr-defined]
+    np.testing.assert_allclose(r, evaluate(fam, (), p), rtol=0, atol=1e-9)
+    h = 1e-4
+    for n in (names[0], "insulation.C_wr", names[-1]):
+        k = names.index(n)
+        x = p.to_log(names)
+        x[k] += h
+        rp = evaluate(fam, (), p.from_log(x, names))
+        x[k] -= 2 * h
+        rm = evaluate(fam, (), p.from_log(x, names))
+        fd = (rp - rm) / (2 * h)
+        # adjoint sensitivities interpolated over the record bins: 2 % of the column
+        assert np.linalg.norm(fd - jm[:, k]) <= 0.02 * np.linalg.norm(fd), n
+
+
+def test_time_windows_no_false_alarm_and_a_burst_is_found() -> None:
+    rng = np.random.default_rng(3)
+    fs, b = 50e6, 10e6
+    # white noise band-limited to b: variance 1 -> chi-square approximation holds
+    spec = np.fft.rfft(rng.standard_normal(200_000))
+    f = np.fft.rfftfreq(200_000, 1 / fs)
+    spec[f > b] = 0
+    e = np.fft.irfft(spec, 200_000)
+    e /= e.std()
+    assert time_windows([("r", e, fs, 1.0)], bandwidth_hz=b) == ()
+    e2 = e.copy()
+    e2[100_000:100_200] += 3.0 * np.sin(np.arange(200) * 0.9)      # 4 us burst at 2 ms
+    w = time_windows([("r", e2, fs, 1.0)], bandwidth_hz=b)
+    assert len(w) >= 1
+    assert w[0].t_s[0] <= 2.004e-3 and w[0].t_s[1] >= 2.0e-3
+    assert w[0].significance > 5
+
+
+def test_cli_without_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["diagnose", str(CASES / FAST_NULL), "--without", "no_such_effect",
+                 "--out", str(tmp_path / "d")])
+    assert code == 2
+    code = main(["diagnose", str(CASES / FAST_NULL), "--without", "fixture_inductance",
+                 "--out", str(tmp_path / "d")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "fixture_inductance" in err
+    assert not (tmp_path / "d" / "diagnosis.json").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [n for n in PMSM if n not in (FAST_CONCEALED, FAST_NULL)])
+def test_every_pmsm_case(name: str) -> None:
+    _check_case(name, _run(name).document)
+
+
+def test_case_list_covers_the_issue() -> None:
+    concealed_cases = [n for n in PMSM if CASE_LIST[n]["effect"] is not None]
+    nulls = [n for n in PMSM if CASE_LIST[n]["effect"] is None]
+    assert len(concealed_cases) >= 8 and len(nulls) >= 2
+    assert Path(CASES / FAST_CONCEALED).is_dir()

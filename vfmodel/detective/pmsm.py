@@ -1,0 +1,408 @@
+"""The PMSM grey-box network as a detective family (``vfmodel diagnose DATASET --without``).
+
+Starting network: the full model of the reference paper (every effect of the vocabulary
+except ``fixture_inductance``) minus the effects named with ``--without``; candidates:
+every effect the starting network lacks, each at the one place of the network where it
+applies (:data:`LOCATIONS`). The network is identified first by the staged grey-box
+identification (:func:`vfmodel.greybox.identify.identify`: impedance spectra, standstill
+H1, lubricant per speed) and then refitted jointly on every channel by the detective.
+
+Channels (the data the detective compares with):
+
+- ``impedance:<topology>``: the six CM/DM spectra (thinned to ``fit_points``), noise
+  from a black-box rational fit (:func:`vfmodel.detective.noise.spectrum_noise`);
+- ``bearing:<rpm>rpm:<phase>``: the H1 transfer from each terminal voltage to the bearing
+  voltage at each recorded speed, the model's output passed through the same estimator as
+  the measurement (paper eq. 21, :class:`vfmodel.greybox._objective.BearingTerm`); noise:
+  the random error of the H1 estimate from the coherence (no model-error floor).
+
+Parameters: the machine parameters of the standstill network (shared by every channel)
+and, per rotating speed ``s``, a copy ``<name>@<s>rpm`` of each speed-dependent lubricant
+parameter (film layers, contact resistance, edge capacitance; the paper identifies them
+per speed). The standstill spectra and the 0 rpm recording share the base lubricant values
+(fitted only when the starting network has no metallic contact: with it the film is
+shorted at standstill).
+
+Jacobians are analytic (adjoint MNA sensitivities chained through the H1 estimator, see
+:mod:`vfmodel.greybox._objective`); :func:`vfmodel.detective.fit.refit` uses
+:meth:`PmsmFamily.residual_jacobian` instead of forward differences.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel._choices import BearingState
+from vfmodel.circuit.poles import network_poles
+from vfmodel.core.dataset import Dataset
+from vfmodel.core.progress import Progress, no_progress
+from vfmodel.detective.noise import spectrum_noise
+from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.errors import InputError
+from vfmodel.greybox._network import NetSpec
+from vfmodel.greybox._objective import (
+    BearingTerm,
+    ImpedanceTerm,
+    LogMap,
+    PreparedRecording,
+    bearing_term,
+    impedance_term,
+    log_map,
+    prepare_recording,
+)
+from vfmodel.greybox.assembly import PHASES
+from vfmodel.greybox.effects import ALL_EFFECTS, PAPER_EFFECTS, check_effects
+from vfmodel.greybox.identify import (
+    _thin,
+    bearing_state,
+    identify,
+    lubricant_names,
+    machine_names,
+)
+from vfmodel.greybox.params import ParamSet, ParamSpec
+
+__all__ = ["LOCATIONS", "PmsmFamily", "pmsm_family", "speed_tag"]
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+LOCATIONS: dict[str, str] = {
+    "winding_skin_effect": "winding",
+    "insulation_dielectric_loss": "insulation",
+    "frame_skin_effect": "frame",
+    "shaft_skin_effect": "shaft",
+    "ball_skin_effect": "bearing.balls",
+    "lubricant_dielectric_loss": "bearing.lubricant",
+    "lubricant_two_layer": "bearing.lubricant",
+    "hertzian_edge_capacitance": "bearing.contact",
+    "metallic_contact": "bearing.contact",
+    "fixture_inductance": "fixture",
+}
+"""Where in the network each effect applies (the ``location`` of a finding)."""
+
+# every speed-dependent name of any structure (per-speed copies exist for all of them)
+_LUB_ALL = ("lubricant.R_1", "lubricant.C_1", "lubricant.R_2", "lubricant.C_2",
+            "lubricant.k_d", "lubricant.tau_d", "bearing.R_h", "bearing.C_edge")
+# start values of a candidate's multistart: (parameter, values spread over the band)
+_STARTS: dict[str, tuple[str, tuple[float, ...]]] = {
+    "winding_skin_effect": ("winding.skin_l_frac", (0.02, 0.1, 0.4)),
+    "insulation_dielectric_loss": ("insulation.tau_d", (1.6e-4, 1.6e-5, 1.6e-6, 1.6e-7)),
+    "frame_skin_effect": ("frame.L_int", (1e-9, 4e-9, 2e-8)),
+    "shaft_skin_effect": ("shaft.L_int", (2e-9, 1e-8, 5e-8)),
+    "ball_skin_effect": ("ball.L_int", (2e-9, 1e-8, 5e-8)),
+    "lubricant_dielectric_loss": ("lubricant.tau_d", (1.6e-5, 1.6e-6, 1.6e-7)),
+    "lubricant_two_layer": ("lubricant.R_2", (30.0, 300.0, 3e3)),
+    "hertzian_edge_capacitance": ("bearing.C_edge", (1e-10, 1e-9, 1e-8)),
+    "fixture_inductance": ("fixture.L", (1e-9, 1e-8, 1e-7)),
+}
+
+
+def speed_tag(rpm: float) -> str:
+    """Suffix of the per-speed parameter copies (``@100rpm``)."""
+    return f"@{rpm:g}rpm"
+
+
+def _structure(base: frozenset[str], applied: Sequence[Candidate]) -> frozenset[str]:
+    return frozenset(base | {c.effect for c in applied})
+
+
+@dataclass(frozen=True, eq=False)
+class PmsmFamily:
+    """Detective family of the PMSM grey-box network (see the module docstring)."""
+
+    dataset_name: str
+    base_effects: frozenset[str]
+    n_rungs: int
+    n_sections: int
+    channels: tuple[Channel, ...]
+    spectra: dict[str, object]
+    topologies: tuple[str, ...]
+    imp_sigma: ArrF
+    preps: tuple[PreparedRecording, ...]
+    start: ParamSet
+    _cands: tuple[Candidate, ...] = ()
+    # compiled terms per structure (a memo of pure functions of the structure, not state)
+    _memo: dict[frozenset[str], tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]] = \
+        field(default_factory=dict, repr=False)
+    _names: dict[frozenset[str], tuple[str, ...]] = field(default_factory=dict, repr=False)
+    _lmaps: dict[tuple[frozenset[str], tuple[str, ...]], LogMap] = field(default_factory=dict,
+                                                                         repr=False)
+
+    # ------------------------------------------------------------------ protocol
+    @property
+    def name(self) -> str:
+        miss = sorted(PAPER_EFFECTS - self.base_effects)
+        return ("PMSM grey-box network of the reference paper"
+                + (f" without {', '.join(miss)}" if miss else "") + f" ({self.dataset_name})")
+
+    def start_params(self) -> ParamSet:
+        return self.start
+
+    def candidates(self) -> tuple[Candidate, ...]:
+        return self._cands
+
+    def spec(self, applied: Sequence[Candidate] = ()) -> NetSpec:
+        return NetSpec(_structure(self.base_effects, applied), self.n_rungs, self.n_sections)
+
+    def free_names(self, applied: Sequence[Candidate], params: ParamSet) -> tuple[str, ...]:
+        eff = _structure(self.base_effects, applied)
+        if eff not in self._names:
+            self._names[eff] = self._free(eff, params)
+        return self._names[eff]
+
+    def _free(self, eff: frozenset[str], params: ParamSet) -> tuple[str, ...]:
+        spec = NetSpec(eff, self.n_rungs, self.n_sections)
+        names = list(machine_names(params, spec))
+        lub = lubricant_names(params, eff)
+        if bearing_state(0.0, eff) == "rotating":     # no contact: the film is seen at rest
+            names += [n for n in lub if n not in names]
+        for p in self.preps:
+            if p.speed_rpm > 0:
+                names += [n + speed_tag(p.speed_rpm) for n in lub]
+        return tuple(names)
+
+    def state(self, rpm: float, applied: Sequence[Candidate] = ()) -> BearingState:
+        return bearing_state(rpm, _structure(self.base_effects, applied))
+
+    def at_speed(self, params: ParamSet, rpm: float) -> ParamSet:
+        """Parameters of the network at ``rpm`` (per-speed lubricant copies substituted)."""
+        if rpm <= 0:
+            return params
+        tag = speed_tag(rpm)
+        return params.with_values({n: params[n + tag] for n in _LUB_ALL if n + tag in params})
+
+    def _terms(self, applied: Sequence[Candidate], params: ParamSet
+               ) -> tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]:
+        eff = _structure(self.base_effects, applied)
+        if eff not in self._memo:
+            spec = NetSpec(eff, self.n_rungs, self.n_sections)
+            imp = impedance_term(self.spectra, spec, params,  # type: ignore[arg-type]
+                                 self.topologies) if self.topologies else None
+            bts = tuple(_bearing_term(p, spec, self.at_speed(params, p.speed_rpm),
+                                      bearing_state(p.speed_rpm, eff)) for p in self.preps)
+            self._memo[eff] = (imp, bts)
+        return self._memo[eff]
+
+    def _lmap(self, applied: Sequence[Candidate], params: ParamSet,
+              names: Sequence[str]) -> LogMap:
+        """Parameter-to-element-value map of the structure (computed once per structure
+        and parameter list; its non-constant columns are re-evaluated at each call)."""
+        eff = _structure(self.base_effects, applied)
+        key = (eff, tuple(names))
+        if key not in self._lmaps:
+            self._lmaps[key] = log_map(params, names, NetSpec(eff, self.n_rungs,
+                                                              self.n_sections))
+        return self._lmaps[key]
+
+    def predict(self, applied: Sequence[Candidate], params: ParamSet) -> list[ArrC]:
+        imp, bts = self._terms(applied, params)
+        out: list[ArrC] = []
+        if imp is not None:
+            z = imp.model(params)
+            out += [z[:, i] for i in range(z.shape[1])]
+        for bt, p in zip(bts, self.preps, strict=True):
+            h = bt.h1_model(self.at_speed(params, p.speed_rpm))
+            out += [h[:, i] for i in range(h.shape[1])]
+        return out
+
+    def residual(self, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
+        """Noise-normalised residual (layout of :mod:`.problem`)."""
+        return self._residual(applied, params, None)[0]
+
+    def residual_jacobian(self, applied: Sequence[Candidate], params: ParamSet,
+                          names: Sequence[str]) -> tuple[ArrF, ArrF]:
+        """Residual and its derivative with respect to ``log`` of ``names`` (analytic)."""
+        r, j = self._residual(applied, params, tuple(names))
+        assert j is not None
+        return r, j
+
+    def _residual(self, applied: Sequence[Candidate], params: ParamSet,
+                  names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
+        jac = names is not None
+        nn = names or ()
+        col = {n: j for j, n in enumerate(nn)}
+        imp, bts = self._terms(applied, params)
+        rs: list[ArrF] = []
+        js: list[ArrF] = []
+        if imp is not None:
+            loc = [n for n in nn if "@" not in n]
+            nt = len(self.topologies)
+            nf = imp.freq_hz.size
+            if loc:
+                r, jm = imp.residual(params, loc, jac=True,
+                                     lmap=self._lmap(applied, params, loc))
+                assert jm is not None
+            else:
+                r, jm = imp.residual(params)[0], np.zeros((2 * nf * nt, 0))
+            scale = imp.sigma / self.imp_sigma                      # term sigma -> detective
+            rr = r.reshape(2, nf, nt) * scale
+            jj = jm.reshape(2, nf, nt, len(loc)) * scale[None, None, :, None]
+            cols = [col[n] for n in loc]
+            for t in range(nt):
+                rs.append(rr[:, :, t].ravel())
+                if jac:
+                    full = np.zeros((2 * nf, len(nn)))
+                    full[:, cols] = jj[:, :, t, :].reshape(2 * nf, len(loc))
+                    js.append(full)
+        for bt, p in zip(bts, self.preps, strict=True):
+            tag = speed_tag(p.speed_rpm)
+            loc, cols = [], []
+            for n in nn:
+                if "@" not in n:
+                    loc.append(n)
+                    cols.append(col[n])
+                elif n.endswith(tag):
+                    loc.append(n[: -len(tag)])
+                    cols.append(col[n])
+            ps = self.at_speed(params, p.speed_rpm)
+            if jac and loc:
+                r, jm = bt.residual(ps, loc, jac=True, lmap=self._lmap(applied, ps, loc))
+                assert jm is not None
+            else:
+                r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
+            # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
+            nfm = bt.h_meas.shape[0]
+            rr = r.reshape(2, nfm, 3)
+            jj = jm.reshape(2, nfm, 3, len(loc))
+            for i in range(3):
+                rs.append(rr[:, :, i].ravel())
+                if jac:
+                    full = np.zeros((2 * nfm, len(nn)))
+                    full[:, cols] = jj[:, :, i, :].reshape(2 * nfm, len(loc))
+                    js.append(full)
+        return np.concatenate(rs), (np.concatenate(js) if jac else None)
+
+    def poles(self, applied: Sequence[Candidate], params: ParamSet) -> ArrC:
+        spec = self.spec(applied)
+        return network_poles(spec.build(params, bearing_state(0.0, spec.effects)))
+
+    # ------------------------------------------------------------------ extras
+    def outputs(self, applied: Sequence[Candidate], params: ParamSet) -> list[ArrF]:
+        """Modelled bearing voltage (periodic steady state) of every recording."""
+        _, bts = self._terms(applied, params)
+        return [bt.output(self.at_speed(params, p.speed_rpm))
+                for bt, p in zip(bts, self.preps, strict=True)]
+
+    def bearing_rel_err_pct(self, fit: object) -> float:
+        """Mean over recordings of the relative peak error of the filtered bearing voltage."""
+        if not self.preps:
+            return float("nan")
+        ys = self.outputs(fit.applied, fit.params)  # type: ignore[attr-defined]
+        errs = [abs(float(np.max(np.abs(y))) - float(np.max(np.abs(p.bearing))))
+                / float(np.max(np.abs(p.bearing))) * 100 for y, p in zip(ys, self.preps,
+                                                                       strict=True)]
+        return float(np.mean(errs))
+
+
+BEARING_F_MAX_HZ = 2e6
+"""Upper end of the bearing H1 band the detective tests. Above it the spectrum of the PWM
+edges (t_r ~ 50 ns: corner ~ 1/(pi t_r) ~ 6 MHz, falling 40 dB/decade above) approaches
+the probe noise floor, and H1 is biased low by the noise on the measured inputs (errors in
+the variables: ``H1 = H (I - G_nn G_xx^-1)``), which can be modelled only on a periodic
+record; a bias the noise model does not hold would be reported as missing physics."""
+
+
+def _bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
+                  state: BearingState) -> BearingTerm:
+    """Condition-2 term of the detective: no model-error floor, the three components of
+    each H1 bin whitened by the estimate's full covariance (unit variance under the null
+    hypothesis), the input-noise bias of H1 modelled where the record allows it, bins up
+    to :data:`BEARING_F_MAX_HZ`."""
+    return bearing_term(prep, spec, params, state, f_max_hz=BEARING_F_MAX_HZ,
+                        model_error=0.0, weighting="covariance", input_noise=True)
+
+
+def _candidate(effect: str, base: ParamSet, family: PmsmFamily) -> Candidate:
+    """``effect`` at its place with the parameters it frees and a multistart."""
+    eff0 = family.base_effects
+    spec_map = {s.name: s for s in base.specs}
+    before = set(family._free(eff0, base))
+    after = family._free(frozenset(eff0 | {effect}), base)
+    new = tuple(spec_map[n] for n in after if n not in before)
+    starts: tuple[tuple[tuple[str, float], ...], ...] = ()
+    if effect in _STARTS:
+        pname, vals = _STARTS[effect]
+        targets = [n for n in after if n == pname or n.startswith(pname + "@")]
+        starts = tuple(tuple((n, v) for n in targets) for v in vals)
+    return Candidate(effect, LOCATIONS[effect], new, starts)
+
+
+def _with_speed_copies(params: ParamSet, speeds: Iterable[float]) -> ParamSet:
+    specs = {s.name: s for s in params.specs}
+    extra = []
+    for rpm in speeds:
+        if rpm <= 0:
+            continue
+        for n in _LUB_ALL:
+            s = specs[n]
+            extra.append(ParamSpec(n + speed_tag(rpm), s.nominal, s.lower, s.upper,
+                                   f"speed {rpm:g} rpm", s.unit, s.description))
+    return params.with_specs(extra)
+
+
+def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: int = 101,
+                n_rungs: int = 3, sections: Sequence[int] = (2, 3, 4),
+                progress: Progress = no_progress) -> PmsmFamily:
+    """Identify the starting network on ``dataset`` and build the family.
+
+    ``without``: effects of the paper's model left out of the starting network;
+    ``fit_points``: points per impedance spectrum used by the detective.
+    """
+    wo = check_effects(without, "--without")
+    bad = wo - PAPER_EFFECTS
+    if bad:
+        raise InputError("--without names effects that the starting model does not have",
+                         place="--without", found=", ".join(sorted(bad)),
+                         expected="effects of the paper's model: "
+                                  + ", ".join(sorted(PAPER_EFFECTS)))
+    if not dataset.impedance and not dataset.recordings:
+        raise InputError("dataset holds neither impedance spectra nor recordings",
+                         source=dataset.name)
+    base = frozenset(PAPER_EFFECTS - wo)
+    recs = sorted(dataset.recordings, key=lambda r: float(r.speed_rpm or 0.0))
+    preps = []
+    for k, r in enumerate(recs):
+        progress("prepare recordings", k, len(recs))
+        preps.append(prepare_recording(r))
+    progress("prepare recordings", len(recs), len(recs))
+    prepared = {p.speed_rpm: p for p in preps}
+    ident = identify(dataset, base, sections=sections, n_rungs=n_rungs, prepared=prepared,
+                     progress=progress)
+    start = _with_speed_copies(ident.params, prepared)
+    vals: dict[str, float] = {}
+    for sf in ident.speeds:
+        if sf.speed_rpm > 0:
+            vals.update({n + speed_tag(sf.speed_rpm): sf.params[n] for n in _LUB_ALL})
+    start = start.with_values(vals, clip=True)
+    # detective channels
+    spectra = _thin(dataset.impedance, fit_points) if dataset.impedance else {}
+    topo = tuple(t for t in spectra)
+    chans: list[Channel] = []
+    sig = []
+    for k, t in enumerate(topo):
+        progress("noise of the spectra", k, len(topo))
+        fd = spectra[t].to_kind("Z")
+        z = fd.values[:, 0, 0]
+        nz = spectrum_noise(dataset.impedance[t].freq_hz,
+                            dataset.impedance[t].to_kind("Z").values[:, 0, 0])
+        sig.append(nz.sigma)
+        chans.append(Channel(f"impedance:{t}", fd.freq_hz, z, np.full(z.size, nz.sigma),
+                             nz.method, None if nz.blackbox is None else nz.blackbox.poles))
+    progress("noise of the spectra", len(topo), len(topo))
+    spec = NetSpec(base, n_rungs, ident.spec.n_sections)
+    for p in preps:
+        bt = _bearing_term(p, spec, start, bearing_state(p.speed_rpm, base))
+        for i, ph in enumerate(PHASES):
+            hm = bt.h_meas[:, i]
+            chans.append(Channel(f"bearing:{p.speed_rpm:g}rpm:{ph}", bt.freq_hz, hm,
+                                 np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
+                                 "h1_covariance"))
+    fam = PmsmFamily(dataset.name, base, n_rungs, ident.spec.n_sections, tuple(chans),
+                     dict(spectra), topo, np.asarray(sig, dtype=float), tuple(preps), start)
+    cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
+    return replace(fam, _cands=cands)
+
