@@ -55,7 +55,12 @@ from vfmodel.greybox._objective import (
     prepare_recording,
 )
 from vfmodel.greybox.assembly import PHASES
-from vfmodel.greybox.effects import ALL_EFFECTS, PAPER_EFFECTS, check_effects
+from vfmodel.greybox.effects import (
+    ALL_EFFECTS,
+    EFFECT_LOCATIONS,
+    PAPER_EFFECTS,
+    check_effects,
+)
 from vfmodel.greybox.identify import (
     _thin,
     bearing_state,
@@ -70,18 +75,7 @@ __all__ = ["LOCATIONS", "PmsmFamily", "pmsm_family", "speed_tag"]
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
 
-LOCATIONS: dict[str, str] = {
-    "winding_skin_effect": "winding",
-    "insulation_dielectric_loss": "insulation",
-    "frame_skin_effect": "frame",
-    "shaft_skin_effect": "shaft",
-    "ball_skin_effect": "bearing.balls",
-    "lubricant_dielectric_loss": "bearing.lubricant",
-    "lubricant_two_layer": "bearing.lubricant",
-    "hertzian_edge_capacitance": "bearing.contact",
-    "metallic_contact": "bearing.contact",
-    "fixture_inductance": "fixture",
-}
+LOCATIONS = EFFECT_LOCATIONS
 """Where in the network each effect applies (the ``location`` of a finding)."""
 
 # every speed-dependent name of any structure (per-speed copies exist for all of them)

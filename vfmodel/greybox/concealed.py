@@ -75,7 +75,7 @@ from vfmodel.greybox.bench import (
     snr_db,
     steady_state,
 )
-from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.effects import EFFECT_LOCATIONS, PAPER_EFFECTS, check_effects
 from vfmodel.greybox.identify import bearing_state, lubricant_names, machine_names
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.truth import lubricant_at_speed
@@ -98,18 +98,7 @@ __all__ = [
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
 
-LOCATIONS: dict[str, str] = {
-    "winding_skin_effect": "winding",
-    "insulation_dielectric_loss": "insulation",
-    "frame_skin_effect": "frame",
-    "shaft_skin_effect": "shaft",
-    "ball_skin_effect": "bearing.balls",
-    "lubricant_dielectric_loss": "bearing.lubricant",
-    "lubricant_two_layer": "bearing.lubricant",
-    "hertzian_edge_capacitance": "bearing.contact",
-    "metallic_contact": "bearing.contact",
-    "fixture_inductance": "fixture",
-}
+LOCATIONS = EFFECT_LOCATIONS
 """Location label the detective reports for each effect."""
 
 

@@ -20,7 +20,8 @@ from typing import get_args
 
 from vfmodel._choices import Effect, check_choice
 
-__all__ = ["ALL_EFFECTS", "EFFECT_INFO", "PAPER_EFFECTS", "EffectInfo", "check_effects"]
+__all__ = ["ALL_EFFECTS", "EFFECT_INFO", "EFFECT_LOCATIONS", "PAPER_EFFECTS", "EffectInfo",
+           "check_effects"]
 
 
 @dataclass(frozen=True)
@@ -195,6 +196,22 @@ EFFECT_INFO: dict[str, EffectInfo] = {
 ALL_EFFECTS: frozenset[str] = frozenset(get_args(Effect))
 PAPER_EFFECTS: frozenset[str] = ALL_EFFECTS - {"fixture_inductance"}
 """The full grey-box model of the reference paper: every effect except the fixture."""
+
+
+EFFECT_LOCATIONS: dict[str, str] = {
+    "winding_skin_effect": "winding",
+    "insulation_dielectric_loss": "insulation",
+    "frame_skin_effect": "frame",
+    "shaft_skin_effect": "shaft",
+    "ball_skin_effect": "bearing.balls",
+    "lubricant_dielectric_loss": "bearing.lubricant",
+    "lubricant_two_layer": "bearing.lubricant",
+    "hertzian_edge_capacitance": "bearing.contact",
+    "metallic_contact": "bearing.contact",
+    "fixture_inductance": "fixture",
+}
+"""The one place of the grey-box network where each effect applies (the ``location`` of a
+detective finding; the network switches an effect everywhere it applies at once)."""
 
 
 def check_effects(effects: object, name: str = "effects") -> frozenset[str]:
