@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from vfmodel.core.atomic import atomic_directory
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_spectrum import csv_text
 from vfmodel.detective.candidates import make_candidate
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.detective.user_model import UserFamily, read_user_model
@@ -53,9 +55,6 @@ USER_CASES: dict[str, dict[str, object]] = {
 }
 
 
-def _write_csv(path: Path, f: np.ndarray, z: np.ndarray) -> None:
-    np.savetxt(path, np.column_stack([f, z.real, z.imag]), delimiter=",", fmt="%.10e",
-               header="frequency_hz,z_real_ohm,z_imag_ohm", comments="")
 
 
 def _truth_values(params: ParamSet, rng: np.random.Generator, sigma: float) -> ParamSet:
@@ -93,7 +92,8 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
         for (name, *_), zz in zip(model.ports, z, strict=True):
             noise = z_noise * np.abs(zz) * (rng.standard_normal(n_freq)
                                             + 1j * rng.standard_normal(n_freq)) / np.sqrt(2)
-            _write_csv(tmp / "impedance" / f"{name}.csv", f, zz + noise)
+            (tmp / "impedance" / f"{name}.csv").write_text(
+                csv_text(FrequencyData(f, zz + noise, kind="Z")))
         (tmp / "truth.json").write_text(json.dumps(
             {"truth_params": tp.as_dict(), "effect": eff, "location": case["location"],
              "z_noise": z_noise, "seed": seed}, indent=1) + "\n")

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from vfmodel.core.atomic import atomic_directory
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_spectrum import csv_text
 from vfmodel.greybox.assembly import TOPOLOGY_PORTS, divider_capacitances
 from vfmodel.greybox.bench import (
     CableSpec,
@@ -61,10 +63,6 @@ def _args(argv: list[str] | None) -> argparse.Namespace:
     return ap.parse_args(argv)
 
 
-def _write_csv(path: Path, f: np.ndarray, z: np.ndarray) -> None:
-    data = np.column_stack([f, z.real, z.imag])
-    np.savetxt(path, data, delimiter=",", fmt="%.9e",
-               header="frequency_hz,z_real_ohm,z_imag_ohm", comments="")
 
 
 def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float = 0.0,
@@ -96,7 +94,8 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
             z = zz[:, i, i] + fix
             noise = z_noise * np.abs(z) * (r_imp.standard_normal(f.size)
                                            + 1j * r_imp.standard_normal(f.size)) / np.sqrt(2)
-            _write_csv(tmp / "impedance" / f"{topo}.csv", f, z + noise)
+            (tmp / "impedance" / f"{topo}.csv").write_text(
+                csv_text(FrequencyData(f, z + noise, kind="Z")))
             imp_summary[topo] = {"z_1khz_ohm": abs(z[0]),
                                  "c_1khz_f": float(-1 / (2 * np.pi * f[0] * z[0].imag))
                                  if "Frame" in topo else None,

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from vfmodel._choices import BearingState
 from vfmodel.circuit.poles import network_poles
 from vfmodel.core.dataset import Dataset
+from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
@@ -113,7 +114,7 @@ class PmsmFamily:
     n_rungs: int
     n_sections: int
     channels: tuple[Channel, ...]
-    spectra: dict[str, object]
+    spectra: dict[str, FrequencyData]
     topologies: tuple[str, ...]
     imp_sigma: ArrF
     preps: tuple[PreparedRecording, ...]
@@ -174,7 +175,7 @@ class PmsmFamily:
         eff = _structure(self.base_effects, applied)
         if eff not in self._memo:
             spec = NetSpec(eff, self.n_rungs, self.n_sections)
-            imp = impedance_term(self.spectra, spec, params,  # type: ignore[arg-type]
+            imp = impedance_term(self.spectra, spec, params,
                                  self.topologies) if self.topologies else None
             bts = tuple(_bearing_term(p, spec, self.at_speed(params, p.speed_rpm),
                                       bearing_state(p.speed_rpm, eff)) for p in self.preps)
@@ -387,16 +388,17 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
         chans.append(Channel(f"impedance:{t}", fd.freq_hz, z, np.full(z.size, nz.sigma),
                              nz.method, None if nz.blackbox is None else nz.blackbox.poles))
     progress("noise of the spectra", len(topo), len(topo))
-    spec = NetSpec(base, n_rungs, ident.spec.n_sections)
-    for p in preps:
-        bt = _bearing_term(p, spec, start, bearing_state(p.speed_rpm, base))
+    fam = PmsmFamily(dataset.name, base, n_rungs, ident.spec.n_sections, (), dict(spectra),
+                     topo, np.asarray(sig, dtype=float), tuple(preps), start)
+    # the bearing channels are those of the starting structure's terms (built once, kept)
+    _, bts = fam._terms((), start)
+    for p, bt in zip(preps, bts, strict=True):
         for i, ph in enumerate(PHASES):
             hm = bt.h_meas[:, i]
             chans.append(Channel(f"bearing:{p.speed_rpm:g}rpm:{ph}", bt.freq_hz, hm,
                                  np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
                                  "h1_covariance"))
-    fam = PmsmFamily(dataset.name, base, n_rungs, ident.spec.n_sections, tuple(chans),
-                     dict(spectra), topo, np.asarray(sig, dtype=float), tuple(preps), start)
+    fam = replace(fam, channels=tuple(chans))      # shares the memo of compiled terms
     cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
     return replace(fam, _cands=cands)
 
