@@ -2,15 +2,16 @@
 """Run the discrepancy detective on every case of ``data/concealed`` and score it.
 
     OMP_NUM_THREADS=1 .venv/bin/python scripts/bench_diagnose.py [--cases DIR] [--only A,B]
-        [--unseen SEED]
+        [--unseen SEED [--truth-rungs N --truth-sections N]]
 
 For each case of ``cases.json`` (made by ``scripts/make_concealed.py``): the ``diagnose``
 job as the CLI runs it (``--without`` for PMSM cases, ``--model`` for user networks), its
 wall time, the findings against the expected ones, chi2_red before and after, and whether
 every decoy was rejected with a reason. ``--unseen SEED`` first writes a fresh set of cases
 with other truth values, effect sizes and noise (``make_concealed.py --seed SEED --unseen``)
-into a temporary directory and scores those. Prints one line per case and a summary; exit 1
-when a case fails.
+into a temporary directory and scores those (``--truth-rungs``/``--truth-sections``: with
+another discretisation of the truth network than the detective's). Prints one line per
+case and a summary; exit 1 when a case fails.
 """
 
 from __future__ import annotations
@@ -61,7 +62,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cases", default=str(ROOT / "data" / "concealed"))
     ap.add_argument("--only", default=None, help="comma-separated case names")
     ap.add_argument("--unseen", type=int, default=None, help="score freshly made cases")
+    ap.add_argument("--truth-rungs", type=int, default=None,
+                    help="with --unseen: rungs of the truth's skin-effect ladders")
+    ap.add_argument("--truth-sections", type=int, default=None,
+                    help="with --unseen: winding sections of the truth")
     a = ap.parse_args(argv)
+    if (a.truth_rungs or a.truth_sections) and a.unseen is None:
+        ap.error("--truth-rungs/--truth-sections need --unseen SEED")
     root = Path(a.cases)
     tmp = None
     if a.unseen is not None:
@@ -70,7 +77,10 @@ def main(argv: list[str] | None = None) -> int:
         sys.path.insert(0, str(ROOT / "scripts"))
         import make_concealed
 
-        make_concealed.main(["--out", str(root), "--seed", str(a.unseen), "--unseen"])
+        extra = (["--truth-rungs", str(a.truth_rungs)] if a.truth_rungs else []) + \
+            (["--truth-sections", str(a.truth_sections)] if a.truth_sections else [])
+        make_concealed.main(["--out", str(root), "--seed", str(a.unseen), "--unseen",
+                             "--no-proxy", *extra])
     cases = json.loads((root / "cases.json").read_text())
     only = set(a.only.split(",")) if a.only else None
     ok_all = True

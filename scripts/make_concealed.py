@@ -3,6 +3,8 @@
 
     .venv/bin/python scripts/make_concealed.py [--out data/concealed] [--only CASE] [--seed 0]
     .venv/bin/python scripts/make_concealed.py --seed 7 --unseen --out /tmp/unseen7
+    .venv/bin/python scripts/make_concealed.py --seed 8 --unseen --truth-rungs 5 \
+        --truth-sections 3 --out /tmp/unseen8
 
 Each case is a dataset generated with one effect present (small, under realistic noise)
 that the model the detective starts from lacks, or with nothing missing (null cases).
@@ -10,6 +12,9 @@ that the model the detective starts from lacks, or with nothing missing (null ca
 the concealed effect and its location, the decoys (named but absent from the data) and the
 expected result. Deterministic for a given seed. ``--seed N --unseen`` draws other truth
 values and effect sizes (the acceptance style "datasets never seen"; needs ``--out``).
+``--truth-rungs`` / ``--truth-sections`` make the truth with another discretisation than
+the detective's network (skin-effect ladders with more rungs, more winding sections), so
+the starting model cannot reproduce the data exactly even where nothing is concealed.
 
 PMSM cases (:data:`vfmodel.greybox.concealed.PMSM_CASES`): each entry also holds ``size``
 (the effect's parameter values), ``proxy_chi2_red`` and ``proxy`` (calibration fit of the
@@ -104,12 +109,13 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
 
 
 def make_pmsm_case(out: Path, case: ConcealedCase, seed: int, unseen: bool,
-                   proxy: bool = True) -> dict[str, object]:
+                   proxy: bool = True, cfg: BenchConfig | None = None) -> dict[str, object]:
     """Write one PMSM case to ``out`` (atomically); returns its ``cases.json`` entry."""
-    cfg = BenchConfig()
+    cfg = cfg or BenchConfig()
     data = generate(case, seed, unseen, cfg)
     entry = {**case.entry(), "seed": seed, "unseen": unseen, "size": data.size,
-             "note": case.note}
+             "note": case.note, "truth_rungs": cfg.n_rungs,
+             "truth_sections": cfg.n_sections}
     if proxy:
         res = proxy_fit(case, data.params, bearing_sigma(data), cfg)
         entry["proxy_chi2_red"] = round(res.chi2_red, 4)
@@ -129,9 +135,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", default=None, help="comma-separated case names")
     ap.add_argument("--no-proxy", action="store_true",
                     help="skip the calibration proxy fit (about 1 min per case)")
+    ap.add_argument("--truth-rungs", type=int, default=BenchConfig.n_rungs,
+                    help="rungs of the truth's skin-effect ladders (detective: 3)")
+    ap.add_argument("--truth-sections", type=int, default=BenchConfig.n_sections,
+                    help="winding sections of the truth (detective: chosen from 2-4)")
     a = ap.parse_args(argv)
     if a.unseen and a.out is None:
         ap.error("--unseen needs --out (data/concealed holds the committed cases)")
+    if a.truth_rungs < 1 or a.truth_sections < 1:
+        ap.error(f"--truth-rungs/--truth-sections: expected integers >= 1, got "
+                 f"{a.truth_rungs}/{a.truth_sections}")
+    cfg = BenchConfig(n_rungs=a.truth_rungs, n_sections=a.truth_sections)
     out = Path(a.out or ROOT / "data" / "concealed")
     out.mkdir(parents=True, exist_ok=True)
     only = set(a.only.split(",")) if a.only else None
@@ -147,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         t0 = time.perf_counter()
         cases[pc.name] = make_pmsm_case(out / pc.name, pc, a.seed, a.unseen,
-                                        proxy=not a.no_proxy)
+                                        proxy=not a.no_proxy, cfg=cfg)
         size = sum(p.stat().st_size for p in (out / pc.name).rglob("*") if p.is_file())
         px = cases[pc.name].get("proxy_chi2_red", "-")
         print(f"wrote {out / pc.name} ({size / 1e6:.2f} MB, {time.perf_counter() - t0:.1f} s, "

@@ -17,6 +17,7 @@ import pytest
 from tests.conftest import REPO
 from vfmodel.cli.main import main
 from vfmodel.detective.fit import evaluate
+from vfmodel.detective.problem import channel_slices
 from vfmodel.detective.windows import time_windows
 from vfmodel.pipeline.diagnose import DiagnoseResult, run_diagnose
 
@@ -67,6 +68,27 @@ def test_concealed_case_found_at_the_right_place(concealed: DiagnoseResult) -> N
 def test_null_case_is_clean(null: DiagnoseResult) -> None:
     _check_case(FAST_NULL, null.document)
     assert 0.8 <= null.document["start"]["chi2_red"] <= 1.2
+
+
+def test_null_residual_points_are_uncorrelated(null: DiagnoseResult) -> None:
+    """The band statistics assume independent residual points: on the null case the
+    pooled lag-1 autocorrelation of the final residual, per kind of channel, must be 0
+    within 3 standard errors (1/sqrt(n pairs)). Every H1 bin (before every second one was
+    taken) gave 0.3 on the bearing channels; the spectra are on independent points."""
+    fam = null.family
+    r = null.diagnosis.final.residual
+    for kind in ("impedance:", "bearing:"):
+        num = den = 0.0
+        n_pairs = 0
+        for c, sl in zip(fam.channels, channel_slices(fam.channels), strict=True):
+            if not c.where.startswith(kind):
+                continue
+            for part in (r[sl][: c.n], r[sl][c.n:]):
+                num += float(part[:-1] @ part[1:])
+                den += float(part @ part) * (part.size - 1) / part.size
+                n_pairs += part.size - 1
+        rho = num / den
+        assert abs(rho) <= 3 / np.sqrt(n_pairs), (kind, rho, n_pairs)
 
 
 def test_analytic_jacobian_matches_central_differences(null: DiagnoseResult) -> None:

@@ -35,6 +35,7 @@ from vfmodel._choices import BearingState, check_choice
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
+from vfmodel.errors import InputError
 from vfmodel.greybox._fast import transfer_on
 from vfmodel.greybox._h1op import H1Operator, h1_operator
 from vfmodel.greybox._network import NetSpec
@@ -371,12 +372,14 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
                  f_max_hz: float = F_CUT_HZ, model_error: float = 0.02,
                  min_coherence: float = 0.5,
                  weighting: H1Weighting = "diagonal",
-                 input_noise: bool = False, max_input_noise: float = 0.2) -> BearingTerm:
+                 input_noise: bool = False, max_input_noise: float = 0.2,
+                 bin_step: int = 1) -> BearingTerm:
     """Condition-2 term of one prepared recording.
 
     Bins from ``f_min_hz`` to ``f_max_hz`` where the H1 estimate is valid and the multiple
     coherence is at least ``min_coherence``; ``model_error`` is the relative error floor
-    ``eps`` of ``sigma``.
+    ``eps`` of ``sigma``. ``bin_step`` keeps every ``bin_step``-th of those bins (the
+    errors of neighbouring bins of a Hann-windowed estimate are correlated).
 
     ``weighting``: ``"diagonal"`` divides each component ``H_i`` by its own standard
     uncertainty ``sigma_i`` (``h_std`` and the floor), ignoring the correlation of the
@@ -405,6 +408,8 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     ``max_input_noise`` of the power of any input (``G_nn,ii / G_xx,ii``) are dropped.
     """
     check_choice("weighting", weighting, H1Weighting)
+    if int(bin_step) != bin_step or bin_step < 1:
+        raise InputError(f"bin_step: expected an integer >= 1, got {bin_step!r}")
     h1 = prep.h1
     f = h1.freq_hz
     coh = np.nan_to_num(h1.coherence[:, 0])
@@ -421,6 +426,10 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
         keep = mask & (ratio <= max_input_noise)
         if keep.sum() >= 10:
             mask = keep
+    if bin_step > 1:
+        keep_idx = np.flatnonzero(mask)[::bin_step]
+        mask = np.zeros_like(mask)
+        mask[keep_idx] = True
     op = h1_operator(prep.terminals_h1, prep.fs_h1, h1, mask)
     hm = h1.h[mask, 0, :]
     sd = h1.h_std[mask, 0, :]

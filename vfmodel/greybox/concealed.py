@@ -24,7 +24,14 @@ chi-square on noisy data would be ``1 + S_min / (N - k)``, which is what it repo
 Detectability (proxy, default bench: 4 PWM periods at 50 MHz, H1 bins every 24 kHz):
 only effects that show in the impedance spectra can be concealed small and still be seen.
 With the lubricant free per speed (as the identification does) ``metallic_contact`` (the
-0-rpm film goes to its lower resistance bound), ``hertzian_edge_capacitance`` (a
+0-rpm "film" becomes a short: loss branch ``tau_d`` ~2 ns, ``C_1`` ~0.8 uF, ``C_2`` ~7 uF;
+proxy 1.0002. Even a physical film envelope, ``C <= 200 nF``, ``R >= 10 ohm``,
+``tau_d >= 10 ns``, does not help, proxy 1.0012: the fit then scales the rotor-side
+capacitances down together, ``C_wr`` 254 -> 8 pF, ``C_rf`` 1.5 -> 0.33 nF, rotating films
+26 -> 0.6 nF; the bearing-voltage ratio depends only on their ratios and the impedance
+spectra hardly see ``C_wr``/``C_rf``, in series and small against ``C_wf``. Finding the
+contact needs their absolute values, from geometry, which the data do not hold),
+``hertzian_edge_capacitance`` (a
 capacitance parallel to the film), ``lubricant_two_layer`` and
 ``lubricant_dielectric_loss`` (Foster-equivalent one-ports: C + (R || C) equals
 C || (R + C), so each mimics the other; relaxations below the first H1 bin are not seen)

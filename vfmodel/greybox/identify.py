@@ -87,6 +87,7 @@ __all__ = [
     "initial_params",
     "lubricant_names",
     "machine_names",
+    "thin_spectra",
 ]
 
 ArrF = NDArray[np.float64]
@@ -326,7 +327,7 @@ def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
 
 
 # ----------------------------------------------------------------------------- driver
-def _thin(spectra: dict[str, FrequencyData], max_points: int) -> dict[str, FrequencyData]:
+def thin_spectra(spectra: dict[str, FrequencyData], max_points: int) -> dict[str, FrequencyData]:
     """Every k-th point of each spectrum so that at most ``max_points`` remain."""
     out = {}
     for t, fd in spectra.items():
@@ -404,7 +405,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     p = p0
     # --- stage 1: impedance spectra, structure selection
     if dataset.impedance:
-        thin = _thin(dataset.impedance, fit_points)
+        thin = thin_spectra(dataset.impedance, fit_points)
         best: tuple[float, NetSpec, ParamSet, StageReport] | None = None
         for n in cands:
             sp = NetSpec(eff, n_rungs, n)
