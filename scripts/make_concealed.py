@@ -111,7 +111,10 @@ def make_user_case(out: Path, case: dict[str, object], seed: int, *, n_freq: int
 def make_pmsm_case(out: Path, case: ConcealedCase, seed: int, unseen: bool,
                    proxy: bool = True, cfg: BenchConfig | None = None) -> dict[str, object]:
     """Write one PMSM case to ``out`` (atomically); returns its ``cases.json`` entry."""
-    cfg = cfg or BenchConfig()
+    cfg = case.config(cfg or BenchConfig())
+    # the proxy fits the detective's structure to a truth of the same structure
+    proxy = proxy and cfg.n_rungs == BenchConfig.n_rungs and \
+        cfg.n_sections == BenchConfig.n_sections
     data = generate(case, seed, unseen, cfg)
     entry = {**case.entry(), "seed": seed, "unseen": unseen, "size": data.size,
              "note": case.note, "truth_rungs": cfg.n_rungs,

@@ -47,7 +47,7 @@ from __future__ import annotations
 import json
 import zlib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -116,7 +116,10 @@ class ConcealedCase:
     ``size`` holds the values of the effect's parameters; ``size_sign`` per parameter is
     ``+1`` when the effect grows with the value, ``-1`` when it shrinks and ``0`` for a
     shape value that is kept (the unseen
-    variant scales a value by ``x ** sign``, ``x`` in [0.7, 1.5]).
+    variant scales a value by ``x ** sign``, ``x`` in [0.7, 1.5]). ``truth_rungs`` /
+    ``truth_sections`` (when set) discretise the truth unlike the detective's network
+    (skin-effect ladder rungs, winding sections), so that even the null case cannot be
+    reproduced exactly.
     """
 
     name: str
@@ -125,6 +128,8 @@ class ConcealedCase:
     size: Mapping[str, float] = field(default_factory=dict)
     size_sign: Mapping[str, int] = field(default_factory=dict)
     note: str = ""
+    truth_rungs: int | None = None
+    truth_sections: int | None = None
 
     def __post_init__(self) -> None:
         check_effects(self.decoys, "decoys")
@@ -154,6 +159,11 @@ class ConcealedCase:
     @property
     def start_effects(self) -> frozenset[str]:
         return frozenset(PAPER_EFFECTS - set(self.without))
+
+    def config(self, base: BenchConfig) -> BenchConfig:
+        """``base`` with the case's own truth discretisation."""
+        return replace(base, n_rungs=self.truth_rungs or base.n_rungs,
+                       n_sections=self.truth_sections or base.n_sections)
 
     def entry(self) -> dict[str, object]:
         """The ``cases.json`` entry (without the calibration numbers)."""
@@ -197,6 +207,15 @@ PMSM_CASES: tuple[ConcealedCase, ...] = (
                   "null: the data are the full paper model (no decoys)"),
     ConcealedCase("pmsm_null_decoys", None, ("winding_skin_effect", "lubricant_two_layer"),
                   {}, {}, "null with decoys: both must be rejected"),
+    ConcealedCase("pmsm_null_rich", None, ("frame_skin_effect",), {}, {},
+                  "null, truth with 5-rung ladders and 3 winding sections (the detective's "
+                  "network has 3 rungs): structure error below the noise is not a finding",
+                  truth_rungs=5, truth_sections=3),
+    ConcealedCase("pmsm_winding_skin_rich", "winding_skin_effect",
+                  ("lubricant_dielectric_loss",), {"winding.skin_l_frac": 0.03},
+                  {"winding.skin_l_frac": 1},
+                  _IMP + "; truth with 5-rung ladders and 3 winding sections",
+                  truth_rungs=5, truth_sections=3),
 )
 """The PMSM cases of ``data/concealed`` (sizes calibrated with :func:`proxy_fit`)."""
 
@@ -297,7 +316,9 @@ def _clean_record(params: ParamSet, effects: frozenset[str], speed_rpm: float,
 
 def generate(case: ConcealedCase, seed: int = 0, unseen: bool = False,
              config: BenchConfig = BenchConfig()) -> CaseData:
-    """Generate the noisy data of ``case`` (deterministic for ``seed``/``unseen``)."""
+    """Generate the noisy data of ``case`` (deterministic for ``seed``/``unseen``; the
+    truth discretised as :meth:`ConcealedCase.config` says)."""
+    config = case.config(config)
     params, size = truth_values(case, seed, unseen, config)
     _, _, r_imp, r_rec = _rngs(case, seed, unseen)
     eff = case.truth_effects
