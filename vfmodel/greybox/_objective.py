@@ -346,7 +346,10 @@ class BearingTerm:
                 cols.append((self._r(self.h1_model(p1)) - r) / step)
             return r, np.stack(cols, axis=1)
         fb = self.prep.bins_hz
-        grid = np.union1d(fb[fb <= _J_DENSE_HZ], self.freq_hz[::2])
+        # every second H1 bin over the tested band (the term may test only some of them)
+        fh = self.op.freq_hz
+        fm = self.freq_hz
+        grid = np.union1d(fb[fb <= _J_DENSE_HZ], fh[(fh >= fm[0]) & (fh <= fm[-1])][::2])
         grid = grid[grid > 0]
         v = values_of(params, self.spec, self.state, sources=True)
         _, dh = self.mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
