@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import stats
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
@@ -69,8 +70,6 @@ def spectrum_noise(freq_hz: ArrF, values: ArrC, *, mismatch: float = 1.5,
                    max_order: int | None = None, extra_orders: int = 5,
                    f_alpha: float = 1e-3) -> SpectrumNoise:
     """Noise estimate of a 1-port spectrum (see the module docstring)."""
-    from scipy import stats
-
     from vfmodel.fitting.vectfit import vector_fit
 
     f = np.asarray(freq_hz, dtype=float)
