@@ -61,7 +61,7 @@ def test_bad_csv_spectrum(case: str, tmp_path: Path, capsys: pytest.CaptureFixtu
 TS_CASES = {
     "garbage": (bytes(range(256)) * 8, "binary"),
     "no_option_line": ("! comment\n1 2 3\n", "no Touchstone option line"),
-    "bad_data": ("# Hz S RI R 50\n1 2\n2 x y\n", "not a readable Touchstone"),
+    "bad_data": ("# Hz S RI R 50\n1 2\n2 x y\n", "line 3: not a number"),
     "empty": ("   \n", "empty"),
     "decreasing": ("# Hz Z RI R 50\n2 1 0\n1 1 0\n", "decreasing frequency"),
 }

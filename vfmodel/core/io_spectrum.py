@@ -29,6 +29,8 @@ from vfmodel.errors import InputError
 _TOUCHSTONE_RE = re.compile(r"^\.(s(\d+)p|ts)$", re.IGNORECASE)
 _Z_RI = ("frequency_hz", "z_real_ohm", "z_imag_ohm")
 _Z_MP = ("frequency_hz", "z_mag_ohm", "z_phase_deg")
+MAX_PORTS = 256
+"""Most ports (or CSV matrix rows/columns) a spectrum file may declare."""
 _GENERIC_RE = re.compile(r"^([zysh])(\d+)_(\d+)_(real|imag)$")
 
 
@@ -65,87 +67,17 @@ def write_spectrum(path: str | Path, data: FrequencyData) -> None:
 
 
 # ---------------------------------------------------------------------- Touchstone
-def _option_line(text: str, src: str) -> tuple[str, float]:
-    """Parameter type and reference resistance from the Touchstone option line."""
-    for raw in text.splitlines():
-        line = raw.split("!", 1)[0].strip()
-        if not line:
-            continue
-        if line.startswith("#"):
-            tokens = line[1:].upper().split()
-            param = "S"
-            r_ref = 50.0
-            for k, tok in enumerate(tokens):
-                if tok in ("S", "Y", "Z", "G", "H"):
-                    param = tok
-                elif tok == "R" and k + 1 < len(tokens):
-                    try:
-                        r_ref = float(tokens[k + 1])
-                    except ValueError:
-                        raise InputError(
-                            "bad reference resistance in the option line",
-                            source=src,
-                            found=tokens[k + 1],
-                        ) from None
-            if param not in ("S", "Y", "Z"):
-                raise InputError(
-                    "unsupported Touchstone parameter type",
-                    source=src,
-                    found=param,
-                    expected="S, Y or Z",
-                )
-            return param, r_ref
-    raise InputError(
-        "no Touchstone option line",
-        source=src,
-        expected="a line like '# Hz S RI R 50' before the data",
-    )
-
-
 def _read_touchstone(path: Path) -> FrequencyData:
-    import skrf
+    """Touchstone file: see :mod:`vfmodel.core.io_touchstone` (own v1 parser, Y/Z
+    normalisation by R, fields of the option line in any order)."""
+    from vfmodel.core.io_touchstone import ports_from_suffix, read_touchstone_text
 
     src = str(path)
-    text = read_text_file(path, "Touchstone")
-    param, _ = _option_line(text, src)
-    m = _TOUCHSTONE_RE.match(path.suffix)
-    assert m is not None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            net = skrf.Network(str(path))
-    except InputError:
-        raise
-    except Exception as err:  # scikit-rf raises many types on malformed files
-        raise InputError(
-            f"not a readable Touchstone file: {type(err).__name__}: {err}",
-            source=src,
-        ) from None
-    if m.group(2) is not None and net.nports != int(m.group(2)):
-        raise InputError(
-            "port count does not match the suffix",
-            source=src,
-            found=f"{net.nports} ports",
-            expected=f"{m.group(2)} ports for {path.suffix}",
-        )
-    if net.f.size == 0:
-        raise InputError("Touchstone file has no data points", source=src)
-    if not np.all(np.isfinite(net.s)):
-        raise InputError(
-            "Touchstone data are not finite after conversion",
-            source=src,
-            expected="finite numbers and a valid option line (e.g. '# Hz Z RI R 50')",
-        )
-    kind: Kind = "S" if param == "S" else ("Z" if param == "Z" else "Y")
-    try:
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            data = FrequencyData.from_network(net, kind=kind, source=src)
-    except np.linalg.LinAlgError as err:
-        raise InputError(
-            f"cannot convert the Touchstone data to {kind} parameters ({err})", source=src
-        ) from None
-    return data
+    n = ports_from_suffix(path)
+    if n is not None and not 1 <= n <= MAX_PORTS:
+        raise InputError("unsupported port count in the file suffix", source=src,
+                         found=path.suffix, expected=f"1 to {MAX_PORTS} ports")
+    return read_touchstone_text(read_text_file(path, "Touchstone"), n, src)
 
 
 def _touchstone_text(path: Path, data: FrequencyData) -> str:
@@ -329,6 +261,13 @@ def _generic_columns(
         raise InputError("CSV columns mix parameter kinds", source=src, found=str(sorted(kinds)))
     n_out = max(int(m.group(2)) for m in matches)
     n_in = max(int(m.group(3)) for m in matches)
+    if 2 * n_out * n_in != len(matches):  # checked before allocating (n_freq, n_out, n_in)
+        raise InputError(
+            "CSV columns do not cover every entry",
+            source=src,
+            found=f"{len(matches)} value columns for indices up to {n_out}x{n_in}",
+            expected=f"{2 * n_out * n_in} columns (real and imag of every entry)",
+        )
     values = np.zeros((table.shape[0], n_out, n_in), complex)
     seen: set[tuple[int, int, str]] = set()
     for col, m in enumerate(matches, start=1):
