@@ -15,13 +15,19 @@ from __future__ import annotations
 
 import re
 
-from vfmodel.circuit.netlist import Circuit, Element
+from vfmodel.circuit.netlist import Circuit, Element, check_value
 from vfmodel.errors import CircuitError
 
 _SUFFIX = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "mil": 25.4e-6, "m": 1e-3,
            "u": 1e-6, "n": 1e-9, "p": 1e-12, "f": 1e-15}
 _NUM = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(meg|mil|[tgkmunpf])?[a-z]*$",
                   re.IGNORECASE)
+
+
+_SKIPPED_CARDS = frozenset(
+    ".tran .ac .dc .op .tf .noise .pz .sens .four .disto .option .options .opt .print .plot "
+    ".probe .save .meas .measure .temp .global .title .ic .nodeset .width .csparam".split())
+"""Analysis, output and option cards: skipped (the network is all that is imported)."""
 
 
 def parse_value(token: str, where: str = "") -> float:
@@ -88,6 +94,9 @@ def from_spice(text: str, *, source: str = "netlist", allow_negative: bool = Fal
             raise CircuitError(f"{source}, line {lineno}: {s.split()[0]!r} is not supported "
                                "(flat R/L/C/K/V/I/E/G/F/H netlists only)")
         if low.startswith("."):
+            if low.split()[0] not in _SKIPPED_CARDS:
+                raise CircuitError(f"{source}, line {lineno}: unknown card {s.split()[0]!r} "
+                                   "(expected elements, analysis/option cards or .end)")
             continue
         cards.append((lineno, s.split()))
 
@@ -102,17 +111,29 @@ def from_spice(text: str, *, source: str = "netlist", allow_negative: bool = Fal
         tok[0].lower(): (names[tok[0].lower()][1] if tok[0].lower() in names else tok[0])
         for _, tok in cards
     }
+    first_line: dict[str, int] = {}
     for lineno, tok in cards:
         where = f"{source}, line {lineno}"
         sname = tok[0]
         letter = sname[0].upper()
         kind_orig = names.get(sname.lower())
         name = spice_to_name[sname.lower()]
+        if sname.lower() in first_line:
+            raise CircuitError(f"{where}: element name {sname!r} is used twice (first on line "
+                               f"{first_line[sname.lower()]}; expected unique names)")
+        first_line[sname.lower()] = lineno
         try:
             el = _element(letter, tok, name, kind_orig[0] if kind_orig else None, node, where,
                           spice_to_name)
         except IndexError:
             raise CircuitError(f"{where}: card {' '.join(tok)!r} has too few fields") from None
+        try:
+            check_value(el, el.value, allow_negative)
+        except CircuitError as err:
+            raise CircuitError(f"{where}: {err}") from None
+        if letter in "RLCVIEGFH" and el.nodes[:2] and el.nodes[0] == el.nodes[1]:
+            raise CircuitError(f"{where}: element {sname!r} has both terminals on node "
+                               f"{el.nodes[0]!r} (expected two different nodes)")
         elements.append(el)
     for orig, n1, n2 in open_switches:
         elements.append(Element(orig, "switch", (node(n1), node(n2)), 0.0, closed=False))

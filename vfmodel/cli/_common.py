@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -29,9 +30,27 @@ def show_progress(quiet: bool) -> bool:
     return not quiet and sys.stderr.isatty()
 
 
+def finite_json(obj: Any) -> Any:
+    """``obj`` with every non-finite float (inf, -inf, NaN) replaced by ``None``.
+
+    Strict JSON has no infinity or NaN; vfmodel writes ``null`` for such a number (README,
+    "Output files": an unbounded significance, a band reaching infinity, a value that
+    could not be computed).
+    """
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [finite_json(v) for v in obj]
+    if hasattr(obj, "dtype") and hasattr(obj, "tolist"):  # numpy scalar or array
+        return finite_json(obj.tolist())
+    return obj
+
+
 def write_json(path: Path, obj: Any) -> None:
-    """Write ``obj`` as indented JSON, atomically."""
-    atomic_write_text(path, json.dumps(obj, indent=2, allow_nan=False) + "\n")
+    """Write ``obj`` as indented strict JSON (non-finite numbers as null), atomically."""
+    atomic_write_text(path, json.dumps(finite_json(obj), indent=2, allow_nan=False) + "\n")
 
 
 class _Bars:

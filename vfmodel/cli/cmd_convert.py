@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from vfmodel.core.atomic import check_output_place
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format, write_spectrum
 from vfmodel.errors import InputError
 
@@ -25,6 +26,7 @@ def convert(src: Path, dst: Path, kind: str | None, z0: float | None) -> None:
     spectrum_format(dst)  # reject an unknown output type before reading anything
     if dst.resolve() == src.resolve():
         raise InputError("output would overwrite the input", source=str(dst))
+    check_output_place(dst, "OUT", directory=False)
     data = read_spectrum(src)
     if kind is not None or z0 is not None:
         data = data.to_kind(kind or data.kind, z0=z0)  # type: ignore[arg-type]

@@ -8,6 +8,10 @@ import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
 
+DIAGNOSE_OUTPUTS = ("diagnosis.json", "report.html", "residual_*.png", "overlay_*.png",
+                    "waveform_bearing_*rpm.png", "poles.png")
+"""Outputs of ``diagnose`` in DIR (an earlier run's are replaced, never mixed)."""
+
 
 def _effects(value: str) -> tuple[str, ...]:
     from vfmodel._choices import EFFECTS
@@ -38,6 +42,7 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | No
     """Fit the starting network to DATASET, locate where it disagrees with the data beyond
     the noise, try every effect it lacks, keep what the data support. Writes
     DIR/diagnosis.json, figures (PNG) and DIR/report.html."""
+    from vfmodel.core.atomic import staged_output
     from vfmodel.errors import InputError
     from vfmodel.pipeline.diagnose import run_diagnose
     from vfmodel.report.diagnose_figures import write_diagnose_figures, write_diagnose_html
@@ -45,15 +50,14 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | No
     if not dataset.exists():
         raise InputError("dataset directory not found", source=str(dataset))
     eff = _effects(without)
-    prog = progress_bar(quiet)
-    opts = {} if max_nfev is None else {"max_nfev": max_nfev}
-    res = run_diagnose(dataset, without=eff, model=model, progress=prog, **opts)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    prog("figures", 0, 1)
-    figs = write_diagnose_figures(res.family, res.diagnosis, out_dir)
-    prog("figures", 1, 1)
-    write_diagnose_html(out_dir / "report.html", res.document, figs)
-    # diagnosis.json last: its presence marks a complete output directory
-    write_json(out_dir / "diagnosis.json", res.document)
+    with staged_output(out_dir, owned=DIAGNOSE_OUTPUTS) as stage:
+        prog = progress_bar(quiet)
+        opts = {} if max_nfev is None else {"max_nfev": max_nfev}
+        res = run_diagnose(dataset, without=eff, model=model, progress=prog, **opts)
+        prog("figures", 0, 1)
+        figs = write_diagnose_figures(res.family, res.diagnosis, stage.dir)
+        prog("figures", 1, 1)
+        write_diagnose_html(stage.path("report.html"), res.document, figs)
+        write_json(stage.path("diagnosis.json"), res.document)
     click.echo(res.document["sentence"])
     click.echo(f"wrote {out_dir / 'diagnosis.json'}, report.html, {len(figs)} figures")

@@ -7,9 +7,12 @@ from pathlib import Path
 import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option
-from vfmodel.core.atomic import atomic_write_text
+from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
+
+FIT_OUTPUTS = ("model.json", "fit.png")
+"""Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""
 
 
 def _order(value: str) -> int | str:
@@ -45,9 +48,6 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
     model with common poles; several files make a block-diagonal model. Writes
     DIR/model.json (CONTRACT section 4) and DIR/fit.png."""
-    from vfmodel.fitting.model_json import model_to_json
-    from vfmodel.pipeline.fit_job import run_fit
-
     n_order = _order(order)
     if spice is not None and spice.suffix.lower() not in (".cir", ".sp", ".spice", ".lib",
                                                           ".sub", ".subckt", ".net"):
@@ -55,6 +55,19 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
                          expected=".cir, .sp, .spice, .lib, .sub or .net")
     for p in spectra:
         spectrum_format(p)
+    with staged_output(out_dir, owned=FIT_OUTPUTS) as stage:
+        spice_tmp = None if spice is None else stage.extra(spice, "--spice")
+        _fit(spectra, n_order, kind, weighting, passive, spice, spice_tmp, no_plot, out_dir,
+             stage.dir, quiet)
+
+
+def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weighting: str,
+         passive: bool, spice: Path | None, spice_tmp: Path | None, no_plot: bool,
+         out_dir: Path, stage: Path, quiet: bool) -> None:
+    """Fit and write every output into the staging folder ``stage``."""
+    from vfmodel.fitting.model_json import model_to_json
+    from vfmodel.pipeline.fit_job import run_fit
+
     data = [read_spectrum(p) for p in spectra]
     res = run_fit(data, order=n_order, kind=kind, weighting=weighting,  # type: ignore[arg-type]
                   passive=passive, progress=progress_bar(quiet))
@@ -71,18 +84,17 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
         }
     obj["order_reason"] = res.fit.order_reason
     obj["sources"] = [str(p) for p in spectra]
-    out_dir.mkdir(parents=True, exist_ok=True)
     from vfmodel.cli._common import write_json
 
-    if spice is not None:
+    if spice_tmp is not None:
         from vfmodel.circuit.synthesis import model_to_spice
 
-        atomic_write_text(spice, model_to_spice(res.model, name="vfmodel"))
-    write_json(out_dir / "model.json", obj)
+        spice_tmp.write_text(model_to_spice(res.model, name="vfmodel"), encoding="utf-8")
+    write_json(stage / "model.json", obj)
     if not no_plot:
         from vfmodel.report.fit_figures import plot_fit
 
-        plot_fit(res.data, res.model, out_dir / "fit.png")
+        plot_fit(res.data, res.model, stage / "fit.png")
     status = "not checked" if res.passivity is None else (
         "passive (certified)" if res.passivity.passive else
         f"NOT passive ({len(res.passivity.bands_hz)} violation bands)")

@@ -7,15 +7,15 @@ from pathlib import Path
 
 import click
 
-from vfmodel.core.io_dataset import read_dataset
-from vfmodel.pipeline.summary import dataset_summary
-
 
 @click.command()
 @click.argument("dataset", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 def info(dataset: Path, as_json: bool) -> None:
     """Topologies, frequency ranges, recordings, sample rates, durations and SNR estimates."""
+    from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.pipeline.summary import dataset_summary
+
     summary = dataset_summary(read_dataset(dataset))
     if as_json:
         click.echo(json.dumps(summary, indent=2))

@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
 from vfmodel.errors import InputError
+
+if TYPE_CHECKING:
+    from vfmodel.circuit.netlist import Circuit
+    from vfmodel.pipeline.predict import Prediction
+
+PREDICT_OUTPUTS = ("prediction.npz", "prediction.json", "prediction.png")
+"""Outputs of ``predict`` in DIR (an earlier run's are replaced, never mixed)."""
 
 
 def _parse_inverter(text: str) -> dict[str, float]:
@@ -19,6 +27,9 @@ def _parse_inverter(text: str) -> dict[str, float]:
             raise InputError("inverter option must be KEY=VALUE", place="--inverter",
                              found=repr(item))
         k, v = item.split("=", 1)
+        if k.strip() in out:
+            raise InputError("inverter option given twice", source="--inverter",
+                             place=k.strip())
         try:
             out[k.strip()] = float(v)
         except ValueError:
@@ -44,31 +55,64 @@ def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: 
     DIR/prediction.png."""
     import numpy as np
 
-    from vfmodel.circuit.spice_import import from_spice
-    from vfmodel.core.atomic import atomic_path
+    from vfmodel.core.atomic import atomic_path, staged_output
     from vfmodel.core.io_recording import read_recording
-    from vfmodel.pipeline.predict import predict_inverter, predict_recording
+    from vfmodel.pipeline.predict import (
+        check_inverter_options,
+        predict_inverter,
+        predict_recording,
+    )
 
     if (recording is None) == (inverter is None):
         raise click.UsageError("give either RECORDING or --inverter")
-    if not model.is_file():
-        raise InputError("model file not found", source=str(model))
-    circ = from_spice(model.read_text(encoding="utf-8", errors="replace"), source=str(model))
-    prog = progress_bar(quiet)
-    prog("predict", 0, 1)
-    if recording is not None:
-        pred = predict_recording(circ, read_recording(recording))
-    else:
-        pred = predict_inverter(circ, _parse_inverter(inverter or ""))
-    prog("predict", 1, 1)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    arrays = {"fs": np.float64(pred.fs), "u_U": pred.terminals[0], "u_V": pred.terminals[1],
-              "u_W": pred.terminals[2], "u_B": pred.u_b}
-    if pred.u_b_measured is not None:
-        arrays["u_B_measured"] = pred.u_b_measured
-    with atomic_path(out_dir / "prediction.npz") as tmp:
-        with open(tmp, "wb") as fh:
+    options = None
+    if inverter is not None:
+        options = _parse_inverter(inverter)
+        check_inverter_options(options)
+    with staged_output(out_dir, owned=PREDICT_OUTPUTS) as stage:
+        circ = read_model_netlist(model)
+        prog = progress_bar(quiet)
+        prog("predict", 0, 1)
+        if recording is not None:
+            pred = predict_recording(circ, read_recording(recording))
+        else:
+            pred = predict_inverter(circ, options or {})
+        prog("predict", 1, 1)
+        arrays = {"fs": np.float64(pred.fs), "u_U": pred.terminals[0],
+                  "u_V": pred.terminals[1], "u_W": pred.terminals[2], "u_B": pred.u_b}
+        if pred.u_b_measured is not None:
+            arrays["u_B_measured"] = pred.u_b_measured
+        with atomic_path(stage.path("prediction.npz")) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
+        _plot(pred, stage.path("prediction.png"))
+        summary = {**pred.summary, "model": str(model),
+                   "excitation": str(recording) if recording is not None else inverter}
+        write_json(stage.path("prediction.json"), summary)
+    click.echo(f"predicted peak bearing voltage {pred.summary['peak_model_v']:.4g} V; "
+               f"wrote {out_dir / 'prediction.json'}")
+
+
+def read_model_netlist(model: Path) -> Circuit:
+    """The model netlist as a checked Circuit; InputError naming the file otherwise."""
+    from vfmodel.circuit.spice_import import from_spice
+    from vfmodel.core._text import read_text_file
+    from vfmodel.errors import CircuitError
+
+    text = read_text_file(model, "model netlist")
+    try:
+        circ = from_spice(text, source=str(model))
+        circ.check()
+    except CircuitError as err:
+        msg = str(err)
+        if not msg.startswith(str(model)):
+            msg = f"{model}: {msg}"
+        raise InputError(msg) from None
+    return circ
+
+
+def _plot(pred: Prediction, path: Path) -> None:
+    import numpy as np
+
     from vfmodel.report._mpl import pyplot, save
 
     plt = pyplot()
@@ -81,9 +125,4 @@ def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: 
     ax.set_ylabel("u_B (V)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    save(fig, out_dir / "prediction.png")
-    summary = {**pred.summary, "model": str(model),
-               "excitation": str(recording) if recording is not None else inverter}
-    write_json(out_dir / "prediction.json", summary)
-    click.echo(f"predicted peak bearing voltage {pred.summary['peak_model_v']:.4g} V; "
-               f"wrote {out_dir / 'prediction.json'}")
+    save(fig, path)

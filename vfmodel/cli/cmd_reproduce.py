@@ -8,6 +8,10 @@ import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
 
+REPRODUCE_OUTPUTS = ("results.json", "report.html", "network_*rpm.cir", "fig*.png",
+                     "blackbox_errors.png", "poles.png")
+"""Outputs of ``reproduce`` in DIR (an earlier run's are replaced, never mixed)."""
+
 
 def _sections(value: str) -> tuple[int, ...]:
     try:
@@ -35,25 +39,25 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, ou
     recordings, lubricant per speed), validate it, compare it with the classical BVR model
     and a black-box fit. Writes DIR/results.json, figures (PNG), DIR/report.html and
     DIR/network_<rpm>rpm.cir for every recorded speed."""
-    from vfmodel.core.atomic import atomic_write_text
+    from vfmodel.core.atomic import atomic_write_text, staged_output
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.pipeline.reproduce import reproduce as run
     from vfmodel.report.html import write_reproduce_html
     from vfmodel.report.reproduce_figures import write_figures
 
     secs = _sections(sections)
-    ds = read_dataset(dataset)
-    prog = progress_bar(quiet)
-    res = run(ds, sections=secs, blackbox=not no_blackbox, max_nfev=max_nfev, progress=prog)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for name, text in res.netlists.items():
-        atomic_write_text(out_dir / name, text)
-    prog("figures", 0, 1)
-    figs = write_figures(res, out_dir)
-    prog("figures", 1, 1)
-    write_reproduce_html(out_dir / "report.html", res.results, figs)
-    # results.json last: its presence marks a complete output directory
-    write_json(out_dir / "results.json", res.results)
+    with staged_output(out_dir, owned=REPRODUCE_OUTPUTS) as stage:
+        ds = read_dataset(dataset)
+        prog = progress_bar(quiet)
+        res = run(ds, sections=secs, blackbox=not no_blackbox, max_nfev=max_nfev,
+                  progress=prog)
+        for name, text in res.netlists.items():
+            atomic_write_text(stage.path(name), text)
+        prog("figures", 0, 1)
+        figs = write_figures(res, stage.dir)
+        prog("figures", 1, 1)
+        write_reproduce_html(stage.path("report.html"), res.results, figs)
+        write_json(stage.path("results.json"), res.results)
     r = res.results
     imp = r.get("impedance", {})
     bea = r.get("bearing", {})

@@ -9,46 +9,46 @@ from __future__ import annotations
 import os
 import sys
 import traceback
+from typing import Any
 
 import click
 
 from vfmodel import __version__
-from vfmodel.cli.cmd_convert import convert
-from vfmodel.cli.cmd_info import info
 from vfmodel.errors import InputError, VfmodelError
 
+_COMMANDS = {
+    "info": "vfmodel.cli.cmd_info",
+    "convert": "vfmodel.cli.cmd_convert",
+    "fit": "vfmodel.cli.cmd_fit",
+    "reproduce": "vfmodel.cli.cmd_reproduce",
+    "diagnose": "vfmodel.cli.cmd_diagnose",
+    "predict": "vfmodel.cli.cmd_predict",
+}
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+
+class _LazyGroup(click.Group):
+    """Commands imported when used (``--help`` and ``info`` start without scipy.signal,
+    matplotlib, cvxpy or scikit-rf; the command modules import those inside)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return list(_COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        import importlib
+
+        module = _COMMANDS.get(cmd_name)
+        if module is None:
+            return None
+        cmd = getattr(importlib.import_module(module), cmd_name)
+        assert isinstance(cmd, click.Command)
+        return cmd
+
+
+@click.group(cls=_LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="vfmodel")
 def cli() -> None:
     """vfmodel: passive rational macromodels and grey-box bearing-voltage models of
     inverter-fed electrical machines from measured high-frequency data."""
-
-
-cli.add_command(info)
-cli.add_command(convert)
-
-
-def _register_optional() -> None:
-    """Commands whose layers may be absent in a partial install are added when importable."""
-    import importlib
-
-    for module, name in (
-        ("vfmodel.cli.cmd_fit", "fit"),
-        ("vfmodel.cli.cmd_reproduce", "reproduce"),
-        ("vfmodel.cli.cmd_diagnose", "diagnose"),
-        ("vfmodel.cli.cmd_predict", "predict"),
-    ):
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as err:
-            if err.name == module:
-                continue
-            raise
-        cli.add_command(getattr(mod, name))
-
-
-_register_optional()
 
 
 def _show_warning(message: Warning | str, category: type[Warning], filename: str,
@@ -56,13 +56,52 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
     click.echo(f"vfmodel: warning: {message}", err=True)
 
 
+BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+            "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+
+def blas_threads() -> int:
+    """BLAS threads the CLI uses: 1 (its dense work is small: more threads only contend),
+    or ``VFMODEL_BLAS_THREADS`` when set; whatever OPENBLAS_NUM_THREADS etc. say."""
+    try:
+        return max(1, int(os.environ.get("VFMODEL_BLAS_THREADS", "1")))
+    except ValueError:
+        return 1
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI and return its exit status (used by the console script)."""
+    """Run the CLI and return its exit status (used by the console script).
+
+    BLAS threads are capped (:func:`blas_threads`): through the environment for the
+    libraries loaded from now on (numpy's and scipy's OpenBLAS are separate) and with
+    threadpoolctl for those already loaded; both are restored on return.
+    """
     import warnings
 
-    with warnings.catch_warnings():
-        warnings.showwarning = _show_warning
-        return _main(argv)
+    n = str(blas_threads())
+    saved = {k: os.environ.get(k) for k in BLAS_ENV}
+    os.environ.update(dict.fromkeys(BLAS_ENV, n))
+    try:
+        with warnings.catch_warnings(), _threadpool_limits(int(n)):
+            warnings.showwarning = _show_warning
+            return _main(argv)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _threadpool_limits(n: int) -> Any:
+    """threadpoolctl's limit for BLAS libraries already loaded (none: a no-op context)."""
+    import contextlib
+
+    if "numpy" not in sys.modules:
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=n, user_api="blas")
 
 
 def _main(argv: list[str] | None) -> int:
@@ -70,9 +109,9 @@ def _main(argv: list[str] | None) -> int:
         cli.main(args=argv, prog_name="vfmodel", standalone_mode=False)
     except click.exceptions.Exit as ex:
         return int(ex.exit_code)
-    except click.exceptions.Abort:
-        click.echo("vfmodel: aborted", err=True)
-        return 1
+    except click.exceptions.Abort:  # click turns KeyboardInterrupt into Abort
+        click.echo("vfmodel: interrupted", err=True)
+        return 130
     except click.ClickException as ex:
         ex.show()
         return 2
@@ -96,7 +135,7 @@ def _main(argv: list[str] | None) -> int:
 
 
 def entry() -> None:
-    """Console-script wrapper."""
+    """Console-script wrapper (see :mod:`vfmodel.cli._entry` for the installed one)."""
     sys.exit(main())
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -14,9 +15,54 @@ from vfmodel.core.io_recording import read_recording
 from vfmodel.core.io_spectrum import read_spectrum
 from vfmodel.errors import InputError
 
+RECORDING_KEYS = ("speed_rpm", "file")
 
-def read_dataset(path: str | Path, load_recordings: bool = True) -> Dataset:
-    """Read a dataset directory (or its ``dataset.toml``) and every file it names."""
+
+def dataset_file(root: Path, rel: object, source: str, place: str,
+                 allow_outside: bool = False) -> Path:
+    """The file ``rel`` names, relative to the dataset folder ``root``.
+
+    A dataset may only reach files inside its own folder: an absolute path, a ``..`` that
+    leaves the folder or a symbolic link that points out of it is refused (InputError
+    naming ``source`` and ``place``, never quoting the file) unless ``allow_outside``.
+    """
+    if not isinstance(rel, str) or not rel.strip():
+        raise InputError("file must be a non-empty string path", source=source, place=place)
+    if "\x00" in rel:
+        raise InputError("file path holds a NUL character", source=source, place=place)
+    target = root / rel
+    if allow_outside:
+        return target
+    if Path(rel).is_absolute():
+        raise InputError("absolute path: a dataset may only reference files inside its "
+                         "folder", source=source, place=place, found=repr(rel),
+                         expected="a path relative to the dataset folder")
+    try:
+        inside = target.resolve().is_relative_to(root.resolve())
+    except (OSError, RuntimeError):  # a symlink loop
+        inside = False
+    if not inside:
+        raise InputError("path leads outside the dataset folder", source=source, place=place,
+                         found=repr(rel), expected="a file inside the dataset folder (no "
+                         "'..' out of it, no symbolic link pointing out of it)")
+    return target
+
+
+def _finite(value: float, key: str, src: str, place: str | None) -> float:
+    x = float(value)
+    if not math.isfinite(x):
+        raise InputError(f"key {key!r} is not a finite number", source=src, place=place,
+                         found=str(value), expected="a finite number")
+    return x
+
+
+def read_dataset(path: str | Path, load_recordings: bool = True,
+                 allow_outside: bool = False) -> Dataset:
+    """Read a dataset directory (or its ``dataset.toml``) and every file it names.
+
+    Files are resolved relative to the dataset folder and must lie inside it (see
+    :func:`dataset_file`); ``allow_outside=True`` lifts that rule for trusted datasets.
+    """
     p = Path(path)
     toml_path = p if p.suffix == ".toml" else p / "dataset.toml"
     root = toml_path.parent
@@ -31,6 +77,8 @@ def read_dataset(path: str | Path, load_recordings: bool = True) -> Dataset:
     name = _get(doc, "name", str, src, required=False) or root.name
     description = _get(doc, "description", str, src, required=False) or ""
     temp = _get(doc, "temperature_c", (int, float), src, required=False)
+    if temp is not None:
+        temp = _finite(temp, "temperature_c", src, None)
     unknown = set(doc) - {"name", "description", "temperature_c", "impedance", "recording"}
     if unknown:
         raise InputError(
@@ -55,7 +103,8 @@ def read_dataset(path: str | Path, load_recordings: bool = True) -> Dataset:
             raise InputError(
                 "impedance file must be a string path", source=src, place=f"[impedance] {topo}"
             )
-        impedance[topo] = _read_impedance(root / rel)
+        impedance[topo] = _read_impedance(
+            dataset_file(root, rel, src, f"[impedance] {topo}", allow_outside))
     recs_raw = doc.get("recording", [])
     if not isinstance(recs_raw, list):
         raise InputError("recordings must be an array of tables [[recording]]", source=src)
@@ -64,10 +113,16 @@ def read_dataset(path: str | Path, load_recordings: bool = True) -> Dataset:
         place = f"[[recording]] #{k + 1}"
         if not isinstance(entry, dict):
             raise InputError("recording entry must be a table", source=src, place=place)
-        speed = _get(entry, "speed_rpm", (int, float), src, place=place)
+        unknown_keys = sorted(set(entry) - set(RECORDING_KEYS))
+        if unknown_keys:
+            raise InputError(f"unknown key {unknown_keys[0]!r}", source=src, place=place,
+                             expected=", ".join(RECORDING_KEYS))
+        speed = _finite(_get(entry, "speed_rpm", (int, float), src, place=place),
+                        "speed_rpm", src, place)
         rel = _get(entry, "file", str, src, place=place)
+        path_k = dataset_file(root, rel, src, f"{place} file", allow_outside)
         if load_recordings:
-            recordings.append(read_recording(root / rel, speed_rpm=float(speed)))
+            recordings.append(read_recording(path_k, speed_rpm=speed))
     speeds = [r.speed_rpm for r in recordings]
     if len(set(speeds)) != len(speeds):
         raise InputError("two recordings at the same speed", source=src, found=str(speeds))

@@ -73,15 +73,66 @@ def read_recording(path: str | Path, speed_rpm: float | None = None) -> Recordin
     )
 
 
+MAX_SAMPLES = 2**24
+"""Longest recording accepted: 16.8 million samples per channel (checked from the array
+headers before anything is allocated)."""
+EXTRA_ARRAYS = ("u_B_DE", "i_CM")
+"""Further channels a recording may hold (CONTRACT section 2a); read but not yet used."""
+KNOWN_ARRAYS = (*CHANNELS, "t", "fs", *EXTRA_ARRAYS)
+
+
+def _npz_headers(p: Path, src: str) -> None:
+    """Check every array header of an NPZ before loading: names, dtypes and sizes.
+
+    An array larger than :data:`MAX_SAMPLES` or than the bytes its member holds (a
+    corrupt or forged header) is refused without allocating it.
+    """
+    from numpy.lib import format as npf
+
+    try:
+        with zipfile.ZipFile(p) as zf:
+            for info in zf.infolist():
+                name = info.filename.removesuffix(".npy")
+                if name not in KNOWN_ARRAYS:
+                    raise InputError("unknown array", source=src, place=f"array {name[:40]}",
+                                     expected=", ".join(KNOWN_ARRAYS))
+                with zf.open(info) as fh:
+                    version = npf.read_magic(fh)
+                    if version == (1, 0):
+                        shape, _, dtype = npf.read_array_header_1_0(fh)
+                    else:
+                        shape, _, dtype = npf.read_array_header_2_0(fh)
+                    header_len = fh.tell()
+                if dtype.hasobject or dtype.itemsize == 0:
+                    raise InputError("array of objects", source=src, place=f"array {name}",
+                                     expected="numbers")
+                count = int(np.prod(shape, dtype=object))
+                if count > MAX_SAMPLES:
+                    raise InputError("array too large", source=src, place=f"array {name}",
+                                     found=f"{count} values",
+                                     expected=f"at most {MAX_SAMPLES} samples per channel")
+                if count * dtype.itemsize > info.file_size - header_len:
+                    raise InputError("array header declares more data than the file holds",
+                                     source=src, place=f"array {name}",
+                                     found=f"{count} values in {info.file_size} bytes")
+    except InputError:
+        raise
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as err:
+        raise InputError(f"not a readable NPZ file ({type(err).__name__})", source=src) \
+            from None
+
+
 def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
     src = str(p)
     if not p.is_file():
         raise InputError("recording file not found", source=src)
+    _npz_headers(p, src)
     try:
         with np.load(p, allow_pickle=False) as z:
             arrays = {k: np.asarray(z[k]) for k in z.files}
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
-        raise InputError(f"not a readable NPZ file ({err})", source=src) from None
+        raise InputError(f"not a readable NPZ file ({type(err).__name__})", source=src) \
+            from None
     missing = [c for c in CHANNELS if c not in arrays]
     if missing:
         raise InputError(
@@ -100,6 +151,23 @@ def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
             )
         chans[c] = a.astype(float)
     _check_lengths(chans, src)
+    for key in ("t", "fs"):
+        if key in arrays and (np.iscomplexobj(arrays[key])
+                              or not np.issubdtype(arrays[key].dtype, np.number)
+                              or arrays[key].dtype == np.bool_):
+            raise InputError("time data must be real numbers", source=src,
+                             place=f"array {key}", found=f"dtype {arrays[key].dtype}",
+                             expected="a real (float or integer) array")
+    fs_given = None
+    if "fs" in arrays:
+        fsa = np.asarray(arrays["fs"])
+        if fsa.size != 1:
+            raise InputError("fs must be a scalar", source=src, place="array fs",
+                             found=f"shape {fsa.shape}")
+        fs_given = float(fsa.ravel()[0])
+        if not (np.isfinite(fs_given) and fs_given > 0):
+            raise InputError("sample rate must be a positive finite number", source=src,
+                             place="array fs", found=f"{fs_given:g}")
     if "t" in arrays:
         t = np.asarray(arrays["t"], dtype=float)
         if t.size != chans[CHANNELS[0]].size:
@@ -108,11 +176,12 @@ def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
                 found=f"{t.size} samples", expected=f"{chans[CHANNELS[0]].size}",
             )
         fs, t0 = _fs_from_time(t, src)
-    elif "fs" in arrays:
-        fsa = np.asarray(arrays["fs"])
-        if fsa.size != 1 or not np.issubdtype(fsa.dtype, np.number):
-            raise InputError("fs must be a scalar", source=src, found=f"shape {fsa.shape}")
-        fs, t0 = float(fsa.ravel()[0]), 0.0
+        if fs_given is not None and abs(fs_given - fs) > 1e-6 * fs:
+            raise InputError("t and fs disagree", source=src, place="arrays t and fs",
+                             found=f"fs {fs_given:.9g} Hz, t spaced for {fs:.9g} Hz",
+                             expected="one of them, or both consistent")
+    elif fs_given is not None:
+        fs, t0 = fs_given, 0.0
     else:
         raise InputError("no time axis", source=src, expected="an array t or a scalar fs")
     return Recording(fs, np.stack([chans[c] for c in CHANNELS]), CHANNELS, speed_rpm, t0, src)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import re
 import warnings
 from pathlib import Path
@@ -34,7 +35,7 @@ MAX_PORTS = 256
 _GENERIC_RE = re.compile(r"^([zysh])(\d+)_(\d+)_(real|imag)$")
 
 
-def spectrum_format(path: str | Path) -> str:
+def spectrum_format(path: str | os.PathLike[str]) -> str:
     """'touchstone' or 'csv' from the file suffix; InputError otherwise."""
     suffix = Path(path).suffix
     if suffix.lower() == ".csv":
@@ -49,7 +50,7 @@ def spectrum_format(path: str | Path) -> str:
     )
 
 
-def read_spectrum(path: str | Path) -> FrequencyData:
+def read_spectrum(path: str | os.PathLike[str]) -> FrequencyData:
     """Read a Touchstone or CSV spectrum (format from the suffix).
 
     Touchstone files keep their parameter type (S, Z or Y) and reference impedance;

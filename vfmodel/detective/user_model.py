@@ -71,11 +71,25 @@ class UserModel:
     effects: tuple[tuple[str, str], ...]
 
 
-def _num(tok: str, where: str) -> float:
+MAX_NODES = 400
+"""Largest user network the detective takes (nodes besides ground)."""
+MAX_FREE_PARAMS = 120
+"""Most free parameters of a user network (each costs a Jacobian column per refit)."""
+
+
+def _num(tok: str, source: str, where: str, positive: bool = False) -> float:
     try:
-        return parse_value(tok, where)
-    except CircuitError as err:
-        raise InputError(str(err)) from None
+        x = parse_value(tok, "")
+    except CircuitError:
+        raise InputError("not a number", source=source, place=where, found=repr(tok[:40]),
+                         expected="a number with an optional SPICE suffix, e.g. 10n") from None
+    if not np.isfinite(x):
+        raise InputError("value is not finite", source=source, place=where, found=tok[:40],
+                         expected="a finite number")
+    if positive and x <= 0:
+        raise InputError("value must be positive", source=source, place=where,
+                         found=tok[:40], expected="a value > 0")
+    return x
 
 
 def parse_user_model(text: str, source: str = "model") -> UserModel:
@@ -84,6 +98,9 @@ def parse_user_model(text: str, source: str = "model") -> UserModel:
     elements: list[tuple[str, str, str, str, float, str | None]] = []
     ports: list[tuple[str, str, str, str]] = []
     effects: list[tuple[str, str]] = []
+    elem_line: dict[str, int] = {}
+    param_line: dict[str, int] = {}
+    port_line: dict[str, int] = {}
     title = ""
     for k, raw in enumerate(text.splitlines(), start=1):
         line = raw.split(";", 1)[0].strip()
@@ -101,14 +118,26 @@ def parse_user_model(text: str, source: str = "model") -> UserModel:
             if len(tok) != 5:
                 raise InputError("expected '.param NAME nominal lower upper'", source=source,
                                  place=where, found=line)
-            lo, nom, hi = (_num(t, where) for t in (tok[3], tok[2], tok[4]))
-            specs.append(ParamSpec(tok[1], nom, lo, hi, "user"))
+            lo, nom, hi = (_num(t, source, where, True) for t in (tok[3], tok[2], tok[4]))
+            if tok[1] in param_line:
+                raise InputError("parameter defined twice", source=source, place=where,
+                                 found=tok[1], expected=f"one .param {tok[1]} (first on "
+                                 f"line {param_line[tok[1]]})")
+            param_line[tok[1]] = k
+            specs.append(_spec(tok[1], nom, lo, hi, source, where))
         elif head == ".port":
             if len(tok) not in (4, 5):
                 raise InputError("expected '.port NAME n+ n- [file]'", source=source,
                                  place=where, found=line)
+            if tok[2] == tok[3]:
+                raise InputError("port between a node and itself", source=source, place=where,
+                                 found=line, expected="two different nodes")
+            if any(tok[1] == q[0] for q in ports):
+                raise InputError("port name used twice", source=source, place=where,
+                                 found=tok[1])
             ports.append((tok[1], tok[2], tok[3],
                           tok[4] if len(tok) == 5 else f"impedance/{tok[1]}.csv"))
+            port_line[tok[1]] = k
         elif head == ".effect":
             if len(tok) < 3:
                 raise InputError("expected '.effect EFFECT PLACE [PLACE ...]'", source=source,
@@ -132,13 +161,21 @@ def parse_user_model(text: str, source: str = "model") -> UserModel:
                 raise InputError("expected 'NAME n1 n2 value [lower upper]' or "
                                  "'NAME n1 n2 {param}'", source=source, place=where, found=line)
             name, n1, n2, val, lo_s, hi_s = m.groups()
+            if name in elem_line:
+                raise InputError("element name used twice", source=source, place=where,
+                                 found=name, expected=f"unique names (first on line "
+                                 f"{elem_line[name]})")
+            elem_line[name] = k
+            if n1 == n2:
+                raise InputError("element between a node and itself", source=source,
+                                 place=where, found=line, expected="two different nodes")
             if val.startswith("{") and val.endswith("}"):
                 elements.append((name, _KIND[letter], n1, n2, 0.0, val[1:-1]))
             else:
-                v = _num(val, where)
+                v = _num(val, source, where, True)
                 if lo_s is not None:
-                    specs.append(ParamSpec(name, v, _num(lo_s, where), _num(hi_s, where),
-                                           "user"))
+                    specs.append(_spec(name, v, _num(lo_s, source, where, True),
+                                       _num(hi_s, source, where, True), source, where))
                     elements.append((name, _KIND[letter], n1, n2, v, name))
                 else:
                     elements.append((name, _KIND[letter], n1, n2, v, None))
@@ -156,6 +193,7 @@ def parse_user_model(text: str, source: str = "model") -> UserModel:
     enames = {e[0]: e for e in elements}
     pnames = {p[0] for p in ports}
     nodes = {n for e in elements for n in e[2:4]}
+    _check_topology(elements, ports, nodes, port_line, elem_line, len(params.names), source)
     for eff, place in effects:
         need = TRANSFORMS[eff].place
         ok = (need in ("capacitor", "resistor") and place in enames
@@ -167,6 +205,48 @@ def parse_user_model(text: str, source: str = "model") -> UserModel:
             raise InputError(f"effect {eff} applies to a {need}", source=source, place=place)
     return UserModel(title or "user model", tuple(elements), params, tuple(ports),
                      tuple(effects))
+
+
+def _spec(name: str, nominal: float, lower: float, upper: float, source: str,
+          where: str) -> ParamSpec:
+    if not lower <= nominal <= upper:
+        raise InputError("bounds must satisfy lower <= nominal <= upper", source=source,
+                         place=where, found=f"{lower:g} {nominal:g} {upper:g}")
+    return ParamSpec(name, nominal, lower, upper, "user")
+
+
+def _check_topology(elements: list[tuple[str, str, str, str, float, str | None]],
+                    ports: list[tuple[str, str, str, str]], nodes: set[str],
+                    port_line: dict[str, int], elem_line: dict[str, int], n_free: int,
+                    source: str) -> None:
+    """Ports on existing nodes, no floating sub-network, a size the detective can fit."""
+    for name, a, b, _ in ports:
+        for n in (a, b):
+            if n != "0" and n not in nodes:
+                raise InputError("port on a node no element touches", source=source,
+                                 place=f"line {port_line[name]}", found=n,
+                                 expected="a node of the network or ground 0")
+    if len(nodes - {"0"}) > MAX_NODES or n_free > MAX_FREE_PARAMS:
+        raise InputError("network too large for the detective", source=source,
+                         found=f"{len(nodes - {'0'})} nodes, {n_free} free parameters",
+                         expected=f"at most {MAX_NODES} nodes and {MAX_FREE_PARAMS} free "
+                         "parameters (each refit costs one network solve per parameter)")
+    parent: dict[str, str] = {}
+
+    def find(n: str) -> str:
+        while parent.setdefault(n, n) != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+
+    for e in elements:
+        parent[find(e[2])] = find(e[3])
+    ground = find("0")
+    for e in elements:
+        if find(e[2]) != ground:
+            raise InputError("floating sub-network: no path to ground 0", source=source,
+                             place=f"line {elem_line[e[0]]}", found=f"element {e[0]}",
+                             expected="every element connected to ground 0 through others")
 
 
 def read_user_model(path: str | Path) -> UserModel:
@@ -231,15 +311,22 @@ class UserFamily:
         return network_poles(self.circuit(applied, params))
 
 
-def user_family(model: UserModel, dataset_dir: str | Path) -> UserFamily:
+def user_family(model: UserModel, dataset_dir: str | Path, source: str | None = None,
+                allow_outside: bool = False) -> UserFamily:
     """Read the port spectra of ``model`` from ``dataset_dir``, estimate their noise and
-    build the candidate list (every declared effect at every declared place)."""
+    build the candidate list (every declared effect at every declared place).
+
+    Port files must lie inside ``dataset_dir`` (``source``: the model file, for messages)
+    unless ``allow_outside``."""
+    from vfmodel.core.io_dataset import dataset_file
+
     root = Path(dataset_dir)
     chans = []
     for name, _, _, rel in model.ports:
-        fd = read_spectrum(root / rel).to_kind("Z")
+        path = dataset_file(root, rel, source or "model", f".port {name}", allow_outside)
+        fd = read_spectrum(path).to_kind("Z")
         if fd.values.shape[1:] != (1, 1):
-            raise InputError("port spectrum must be a 1-port", source=str(root / rel))
+            raise InputError("port spectrum must be a 1-port", source=str(path))
         z = fd.values[:, 0, 0]
         nz = spectrum_noise(fd.freq_hz, z)
         chans.append(Channel(f"impedance:{name}", fd.freq_hz, z,

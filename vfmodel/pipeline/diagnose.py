@@ -137,7 +137,7 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
                              "changes are the model's .effect lines", place="--without")
         from vfmodel.detective.user_model import read_user_model, user_family
 
-        fam = user_family(read_user_model(model), dataset)
+        fam = user_family(read_user_model(model), dataset, source=str(model))
     else:
         from vfmodel.core.io_dataset import read_dataset
         from vfmodel.detective.pmsm import pmsm_family

@@ -26,7 +26,8 @@ from vfmodel.greybox.bench import CableSpec, InverterSpec, ScopeSpec, steady_sta
 from vfmodel.greybox.metrics import F_CUT_HZ, peak_errors, peak_v, spectral_corr
 from vfmodel.signals.filters import brickwall_filter
 
-__all__ = ["Prediction", "inverter_options", "predict_inverter", "predict_recording"]
+__all__ = ["Prediction", "check_inverter_options", "inverter_options", "predict_inverter",
+           "predict_recording"]
 
 ArrF = NDArray[np.float64]
 
@@ -42,10 +43,11 @@ class Prediction:
     summary: dict[str, object]
 
 
-def _check_nodes(circ: Circuit) -> None:
+def _check_nodes(circ: Circuit, source: str | None = None) -> None:
     missing = [n for n in (*PHASES, BEARING_NODE) if n not in circ.nodes]
     if missing:
-        raise InputError("model netlist lacks the grey-box nodes", place=", ".join(missing),
+        raise InputError("model netlist lacks the grey-box nodes", source=source,
+                         place=", ".join(missing),
                          expected="nodes U, V, W, SN and ground 0 (a network_<rpm>rpm.cir "
                                   "written by vfmodel reproduce)")
 
@@ -92,25 +94,79 @@ def inverter_options() -> dict[str, float]:
     return out
 
 
-def predict_inverter(model: Circuit, options: Mapping[str, float]) -> Prediction:
-    """Periodic steady state of inverter + cable + model network (keys: inverter_options)."""
-    _check_nodes(model)
+MAX_SAMPLES = 2_000_000
+"""Longest inverter record predicted (``n_periods * fs_hz / f_sw_hz`` samples, ~1 GB)."""
+
+# (lower, upper) bounds of the inverter options (cable_*: 0 to 1e9). Integer
+# options must be whole numbers. Ranges are wide (any drive a user may describe) but keep
+# the record finite and the 10 MHz analysis band below the Nyquist frequency.
+_BOUNDS: dict[str, tuple[float, float]] = {
+    "speed_rpm": (0.0, 1e6), "f_sw_hz": (1.0, 1e8), "v_dc": (0.0, 1e6),
+    "t_rise_s": (1e-12, 1e-3), "t_fall_s": (1e-12, 1e-3), "pole_pairs": (1, 1000),
+    "m_0": (0.0, 1.5), "m_per_rpm": (0.0, 1.0), "theta0_rad": (-1e3, 1e3),
+    "d_min": (0.0, 0.49), "fs_hz": (2 * F_CUT_HZ, 1e11), "n_periods": (1, 1e6),
+    "probe_bw_hz": (1.0, 1e12), "snr_terminal_db": (-200.0, 400.0),
+    "snr_bearing_db_standstill": (-200.0, 400.0), "emi_fraction": (0.0, 1e3),
+}
+_POSITIVE = ("f_sw_hz", "v_dc", "t_rise_s", "t_fall_s", "fs_hz", "probe_bw_hz")
+_INTEGER = ("pole_pairs", "n_periods")
+
+
+def check_inverter_options(
+    options: Mapping[str, float],
+) -> tuple[InverterSpec, CableSpec, ScopeSpec, float]:
+    """Validate inverter options (keys: :func:`inverter_options`) and build the specs.
+
+    InputError naming the key for an unknown key, a non-finite, non-positive (where a
+    positive value is needed), fractional (``pole_pairs``, ``n_periods``) or out-of-range
+    value, and for a record longer than :data:`MAX_SAMPLES` samples.
+    """
     known = inverter_options()
-    for k in options:
+    for k, v in options.items():
         if k not in known:
-            raise InputError("unknown inverter option", place=k,
+            raise InputError("unknown inverter option", source="--inverter", place=k,
                              expected="one of " + ", ".join(sorted(known)))
+        x = float(v)
+        lo, hi = (0.0, 1e9) if k.startswith("cable_") else _BOUNDS.get(k, (-1e30, 1e30))
+        if not np.isfinite(x):
+            raise InputError("inverter option must be a finite number", source="--inverter",
+                             place=k, found=str(v))
+        if (k in _POSITIVE or k.startswith("cable_")) and x <= 0:
+            raise InputError("inverter option must be positive", source="--inverter", place=k,
+                             found=f"{x:g}")
+        if k in _INTEGER and x != round(x):
+            raise InputError("inverter option must be a whole number", source="--inverter",
+                             place=k, found=f"{x:g}")
+        if not lo <= x <= hi:
+            raise InputError("inverter option out of range", source="--inverter", place=k,
+                             found=f"{x:g}", expected=f"{lo:g} to {hi:g}")
     inv, cable, scope = InverterSpec(), CableSpec(), ScopeSpec()
     for k, v in options.items():
         if k.startswith("cable_"):
             cable = replace(cable, **{k[6:]: float(v)})
         elif k in {f.name for f in fields(InverterSpec)}:
             typ = type(getattr(inv, k))
-            inv = replace(inv, **{k: typ(v)})
+            inv = replace(inv, **{k: typ(round(v) if typ is int else v)})
         elif k in {f.name for f in fields(ScopeSpec)}:
             typ = type(getattr(scope, k))
-            scope = replace(scope, **{k: typ(v)})
+            scope = replace(scope, **{k: typ(round(v) if typ is int else v)})
     speed = float(options.get("speed_rpm", known["speed_rpm"]))
+    n = round(scope.n_periods * scope.fs_hz / inv.f_sw_hz)
+    if n > MAX_SAMPLES or n < 64:
+        raise InputError("inverter record length out of range", source="--inverter",
+                         place="n_periods*fs_hz/f_sw_hz",
+                         found=f"{n} samples", expected=f"64 to {MAX_SAMPLES} samples")
+    if not inv.t_rise_s + inv.t_fall_s < 1.0 / inv.f_sw_hz:
+        raise InputError("switching edges longer than the PWM period", source="--inverter",
+                         place="t_rise_s", found=f"{inv.t_rise_s + inv.t_fall_s:g} s",
+                         expected=f"t_rise_s + t_fall_s < 1/f_sw_hz = {1 / inv.f_sw_hz:g} s")
+    return inv, cable, scope, speed
+
+
+def predict_inverter(model: Circuit, options: Mapping[str, float]) -> Prediction:
+    """Periodic steady state of inverter + cable + model network (keys: inverter_options)."""
+    inv, cable, scope, speed = check_inverter_options(options)
+    _check_nodes(model)
     y = steady_state(model, inv, cable, scope, speed)
     fs = scope.fs_hz
     x = brickwall_filter(y[:3], fs, F_CUT_HZ)
