@@ -33,7 +33,7 @@ def read_text_file(path: str | Path, what: str, max_bytes: int = MAX_TEXT_BYTES)
             if b"\x00" in head:
                 raise InputError(f"{what} file is binary", source=str(p),
                                  expected="a text file")
-            raw = head + fh.read(max_bytes + 1 - len(head))
+            raw = head + fh.read()  # size checked above (read(n) would allocate n)
     except OSError as err:
         raise InputError(f"cannot read the {what} file ({err.strerror})", source=str(p)) \
             from None

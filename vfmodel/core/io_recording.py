@@ -197,6 +197,8 @@ def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
             "unknown recording CSV header", source=src, place="line 1",
             found=first.strip()[:80], expected=",".join(CSV_HEADER),
         )
+    if not rest.strip():
+        raise InputError("recording CSV has no data rows", source=src)
     try:
         table = np.loadtxt(io.StringIO(rest), delimiter=",", ndmin=2)
     except ValueError as err:

@@ -180,11 +180,12 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
         raise InputError("Touchstone file has no data points", source=src)
     table = np.frombuffer(data, dtype=float).reshape(-1, per_row)
     a, b = table[:, 1::2], table[:, 2::2]
-    if opt.fmt == "RI":
-        flat = a + 1j * b
-    else:
-        mag = 10.0 ** (a / 20.0) if opt.fmt == "DB" else a
-        flat = mag * np.exp(1j * np.deg2rad(b))
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow refused in _to_data
+        if opt.fmt == "RI":
+            flat = a + 1j * b
+        else:
+            mag = 10.0 ** (a / 20.0) if opt.fmt == "DB" else a
+            flat = mag * np.exp(1j * np.deg2rad(b))
     values = flat.reshape(-1, n, n)
     if n == 2:
         values = values.transpose(0, 2, 1)  # N11 N21 N12 N22: column by column
@@ -205,10 +206,11 @@ def _to_data(freq: np.ndarray, values: np.ndarray, opt: OptionLine, src: str,
         raise InputError("unsupported Touchstone parameter type", source=src,
                          found=opt.param, expected="S, Y or Z")
     kind: Kind = opt.param  # type: ignore[assignment]
-    if kind == "Z" and normalised:
-        values = values * opt.r_ohm           # stored z = Z / R
-    elif kind == "Y" and normalised:
-        values = values / opt.r_ohm           # stored y = Y * R
+    with np.errstate(over="ignore", invalid="ignore"):
+        if kind == "Z" and normalised:
+            values = values * opt.r_ohm           # stored z = Z / R
+        elif kind == "Y" and normalised:
+            values = values / opt.r_ohm           # stored y = Y * R
     if not np.all(np.isfinite(values)):
         raise InputError("Touchstone values overflow", source=src,
                          expected="magnitudes (or dB values) that fit a float")
