@@ -143,16 +143,24 @@ def test_fewer_points_than_poles() -> None:
 
 
 def test_constant_data() -> None:
+    # a frequency-independent response is a legitimate model: no poles, D alone
     data = FrequencyData(FREQ, np.full(FREQ.size, 3.0 + 0j), kind="Z")
-    with pytest.raises(InputError, match="does not change with frequency"):
-        vector_fit(data, 4)
-    with pytest.raises(InputError, match="does not change with frequency"):
-        vector_fit(data, "auto")
+    for order in (4, "auto"):
+        model, report = vector_fit(data, order)
+        assert model.n_poles == 0 and report.order == 0
+        assert model.d[0, 0] == pytest.approx(3.0, rel=1e-12)
+        assert report.rel_rms_error < 1e-12
 
 
 def test_all_zero_data() -> None:
     data = FrequencyData(FREQ, np.zeros((FREQ.size, 2, 2)), kind="Z")
-    with pytest.raises(InputError, match="zero at every frequency"):
+    model, report = vector_fit(data, 4)
+    assert model.n_poles == 0 and np.all(model.d == 0) and report.rms_error == 0
+
+
+def test_constant_complex_data_refused() -> None:
+    data = FrequencyData(FREQ, np.full(FREQ.size, 3.0 + 1j), kind="Z")
+    with pytest.raises(InputError, match="constant that is not real"):
         vector_fit(data, 4)
 
 
@@ -180,5 +188,5 @@ def test_bad_arguments(kwargs: dict[str, object], match: str) -> None:
 
 
 def test_not_frequency_data() -> None:
-    with pytest.raises(InputError, match=r"FrequencyData or a skrf\.Network"):
+    with pytest.raises(InputError, match=r"FrequencyData, a skrf\.Network or a path"):
         vector_fit(np.ones(10), 2)  # type: ignore[arg-type]

@@ -13,8 +13,16 @@ Kind = Literal["Z", "Y", "S", "H"]
 
 ImmittanceKind = Literal["Z", "Y"]
 
-Weighting = Literal["uniform", "inv_abs", "inv_sqrt_abs"]
-"""Vector-fitting weights: 1, 1/|H|, 1/sqrt(|H|) (a user array is also accepted)."""
+Weighting = Literal[
+    "auto", "relative", "uniform", "inv_abs", "inv_sqrt_abs", "inverse", "inverse-sqrt"
+]
+"""Vector-fitting weights: "relative" 1/||H(f)||_F per frequency (relative accuracy per
+point), "uniform" 1, "inv_abs"/"inverse" 1/|H_ij|, "inv_sqrt_abs"/"inverse-sqrt"
+1/sqrt|H_ij|; "auto" = "relative" for Z, Y, H data spanning more than a decade, else
+"uniform" (a user array is also accepted)."""
+
+DcMode = Literal["enforce", "fit"]
+"""0 Hz sample: matched exactly by D ("enforce") or fitted like any sample ("fit")."""
 
 PoleSpacing = Literal["log", "lin"]
 

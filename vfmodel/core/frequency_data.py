@@ -219,3 +219,53 @@ class FrequencyData:
             z0=z0.real if kind == "S" else None,
             source=source or network.name,
         )
+
+
+def as_frequency_data(
+    data: Any, kind: Kind | None = None, *, source: str = "data"
+) -> FrequencyData:
+    """The one data argument of the public API as :class:`FrequencyData`.
+
+    Accepts a :class:`FrequencyData`, a :class:`skrf.Network` (read as S at its real
+    reference impedance, or as ``kind``) or a path to a Touchstone or CSV spectrum (read
+    by :func:`vfmodel.read_spectrum`); with ``kind`` the data is converted to that kind.
+
+    Raises
+    ------
+    InputError
+        Anything else, or a conversion the data does not allow.
+    """
+    import os
+
+    if isinstance(data, FrequencyData):
+        fd = data
+    elif isinstance(data, str | os.PathLike):
+        from vfmodel.core.io_spectrum import read_spectrum
+
+        fd = read_spectrum(data)
+    else:
+        try:
+            import skrf
+        except ImportError:  # pragma: no cover
+            skrf = None
+        if skrf is None or not isinstance(data, skrf.Network):
+            raise InputError(
+                "data must be a FrequencyData, a skrf.Network or a path to a spectrum file",
+                source=source,
+                found=type(data).__name__,
+                expected="FrequencyData, skrf.Network, str or os.PathLike",
+            )
+        fd = FrequencyData.from_network(data, kind=kind if kind in ("Z", "Y") else "S")
+    if kind is not None:
+        if kind not in KINDS:
+            raise InputError("unknown kind", source=source, found=repr(kind),
+                             expected=f"one of {KINDS}")
+        if kind != fd.kind:
+            if kind == "H" or fd.kind == "H":
+                raise InputError(
+                    f"{fd.kind} data cannot be converted to {kind}",
+                    source=fd.source or source,
+                    expected=f"{fd.kind} (or Z/Y/S conversions between network parameters)",
+                )
+            fd = fd.to_kind(kind)
+    return fd

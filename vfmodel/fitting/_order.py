@@ -185,6 +185,7 @@ def auto_order(
     max_iterations: int,
     tol: float,
     stable: bool,
+    target: float | None = None,
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
@@ -196,9 +197,10 @@ def auto_order(
     within 25 % of the floor. Poles are then removed by backward elimination while the
     error stays within that bound; trials of one pole less (re-seeded, relocated) continue
     while they stay within it. The model kept is relocated to convergence unless it came
-    from a converged trial.
+    from a converged trial. With ``target`` the floor is ``target / 1.25`` instead of the
+    noise estimate (the order stops at the requested error).
     """
-    noise = estimate_noise(prob)
+    noise = estimate_noise(prob) if target is None else target / _NOISE_MARGIN
     data_rms = float(np.sqrt(np.mean(np.abs(prob.wh) ** 2)))
     reps = core.starting_poles(min(max_order, _START_ORDER), w_lo, w_hi, spacing)
     history: list[core.IterationRecord] = []
@@ -223,7 +225,7 @@ def auto_order(
         err = err_last = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         n = core.n_poles(coef.reps)
         tried.append((n, err, coef))
-        if err <= _RESIDUAL_CHECK * _NOISE_MARGIN * noise:  # near the floor: refine it
+        if target is None and err <= _RESIDUAL_CHECK * _NOISE_MARGIN * noise:  # refine
             noise = min(noise, _residual_noise(prob, coef))
         if err <= _NOISE_MARGIN * max(noise, _EXACT / _NOISE_MARGIN):
             why = "noise"
@@ -292,7 +294,9 @@ def auto_order(
             coef = final.coef
     err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
     n = core.n_poles(coef.reps)
-    if why == "noise":
+    if why == "noise" and target is not None:
+        reason = f"order {n}: weighted relative RMS error {err:.3g} within the target {target:.3g}"
+    elif why == "noise":
         if noise * _NOISE_MARGIN <= _EXACT:
             reason = f"exact fit: weighted relative RMS error {err:.3g} at order {n}"
         else:

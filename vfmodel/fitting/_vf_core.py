@@ -58,6 +58,12 @@ class Problem:
         Fit the constant and the proportional term.
     dc_index : int or None
         Index of the 0 Hz sample whose real part the model matches exactly (with ``fit_d``).
+    pole_bounds : (lo, hi) or None
+        Bounds on the magnitude of real poles (scaled): a relocated real pole outside is
+        moved to the bound. A real pole far below a band that does not reach 0 Hz acts
+        in the band like an integrator whose out-of-band value (at 0 Hz) is huge; far
+        above, like a second D; either makes a scattering model grossly non-passive out of
+        band, which enforcement can only repair by distorting the fit.
     """
 
     s: ComplexArray
@@ -66,6 +72,7 @@ class Problem:
     fit_d: bool
     fit_e: bool
     dc_index: int | None
+    pole_bounds: tuple[float, float] | None = None
 
     @property
     def n_freq(self) -> int:
@@ -149,6 +156,27 @@ def reps_from_eigenvalues(z: ComplexArray, stable: bool) -> ComplexArray:
         re = -np.maximum(np.abs(cplx.real), 1e-9 * np.abs(cplx))
         cplx = re + 1j * cplx.imag
     return sort_reps(np.concatenate([real.astype(complex), cplx]))
+
+
+def bound_real_poles(
+    reps: ComplexArray, bounds: tuple[float, float] | None
+) -> ComplexArray:
+    """Real representatives with their magnitude clipped to ``bounds`` (see Problem)."""
+    if bounds is None:
+        return reps
+    real = reps.imag == 0
+    if not np.any(real):
+        return reps
+    out = reps.copy()
+    mag = np.abs(out[real].real)
+    low, high = mag < bounds[0], mag > bounds[1]
+    if not (np.any(low) or np.any(high)):
+        return reps
+    # clipped poles are spread geometrically (coincident poles make the basis singular)
+    mag[low] = bounds[0] / 1.5 ** np.arange(int(np.sum(low)))
+    mag[high] = bounds[1] * 1.5 ** np.arange(int(np.sum(high)))
+    out[real] = -mag + 0j
+    return sort_reps(out)
 
 
 def starting_poles(
@@ -524,6 +552,7 @@ def iterate(
     for it in range(1, max_iterations + 1):
         exact_rows = precise if precise is not None else bool(last <= _GRAM_ERROR)
         reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf)
+        reps = bound_real_poles(reps, prob.pole_bounds)
         pf = partial_fractions(prob.s, reps)
         coef = solve_residues(prob, reps, pf)
         err = weighted_rel_rms(prob, evaluate(prob, coef, pf))

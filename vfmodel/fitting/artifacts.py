@@ -1,7 +1,8 @@
 """Samples of a frequency response that are not data: export padding and isolated spikes.
 
 - Padding: a run of trailing samples that repeat the last distinct sample bit for bit (some
-  solvers export beyond their computed band by repeating the last value). No physical
+  solvers export beyond their computed band by repeating the last value), after at least
+  two varying samples (data equal from the first samples on is a constant response). No physical
   response is constant to the last digit over a band; a causal nearly lossless one cannot be
   constant at all, so fitting such a run only distorts the model.
 - Spikes: single samples that leave a smooth response far above its local roughness while
@@ -84,6 +85,10 @@ def _padding_start(values: NDArray[np.complex128]) -> int:
     j = k - 1
     while j > 0 and np.array_equal(values[j - 1], last):
         j -= 1
+    # a response repeated from (nearly) the first sample on is constant data (an ideal
+    # short, a resistive tee), not padding: padding follows a computed, varying band
+    if j < 2:
+        return k
     return j + 1 if k - 1 - j >= 2 else k
 
 

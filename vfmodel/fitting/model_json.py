@@ -1,4 +1,11 @@
-"""`model.json` of ``vfmodel fit`` (CONTRACT section 4): build, write atomically, read."""
+"""`model.json` of ``vfmodel fit`` (CONTRACT section 4): build, write atomically, read.
+
+The file is strict JSON: no ``Infinity`` or ``NaN`` token anywhere. An unbounded value is
+written as ``null``: the upper edge of a passivity violation band that extends to infinite
+frequency (``"bands_hz": [[1e9, null]]``), a worst violation that occurs at infinite
+frequency (``"worst_freq_hz": null`` beside a positive ``"worst_violation"``, i.e. in D),
+and any statistic that is not defined (no data, not checked).
+"""
 
 from __future__ import annotations
 
@@ -9,13 +16,21 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from vfmodel.fitting.vectfit import FitReport
 
-__all__ = ["model_to_json", "read_model_json", "write_model_json"]
+__all__ = [
+    "json_safe",
+    "model_to_json",
+    "passivity_to_json",
+    "read_model_json",
+    "write_model_json",
+]
 
 
 def _finite_or_none(x: float | None) -> float | None:
@@ -23,6 +38,58 @@ def _finite_or_none(x: float | None) -> float | None:
         return None
     x = float(x)
     return x if math.isfinite(x) else None
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float replaced by None (strict JSON, see the module
+    docstring), tuples as lists and numpy scalars as Python numbers."""
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, bool | str) or obj is None:
+        return obj
+    if isinstance(obj, int | np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    try:
+        x = float(obj)
+    except (TypeError, ValueError):
+        return obj
+    return x if math.isfinite(x) else None
+
+
+def passivity_to_json(report: Any, unconstrained_rel_rms_error: float | None = None,
+                      data_floor: Any = None) -> dict[str, Any]:
+    """The ``passivity`` object of ``model.json``.
+
+    Keys: ``passive`` (certified: Hamiltonian test and its sampling cross-check agree),
+    ``method``, ``bands_hz`` (list of [lo, hi]; hi null = the band extends to infinite
+    frequency), ``worst_violation`` (>= 0: -min eig Re H for Z/Y, sigma_max - 1 for S),
+    ``worst_freq_hz`` (null at infinite frequency or when passive), ``min_margin`` (the
+    smallest margin found by the sampling cross-check, negative = violation),
+    ``enforcement_iterations``, ``unconstrained_rel_rms_error`` (error before
+    enforcement), ``data_floor`` (the data's own violation floor, see
+    :mod:`vfmodel.fitting.data_passivity`), ``data_worst_violation``, ``data_active``.
+    """
+    out: dict[str, Any] = {
+        "passive": bool(report.passive),
+        "method": report.method,
+        "bands_hz": [[lo, hi] for lo, hi in report.bands_hz],
+        "worst_violation": report.worst_violation,
+        "worst_freq_hz": report.worst_freq_hz if report.worst_violation > 0 else None,
+        "min_margin": report.min_margin,
+        "enforcement_iterations": report.iterations,
+        "unconstrained_rel_rms_error": unconstrained_rel_rms_error,
+        "notes": list(report.notes),
+    }
+    if data_floor is not None:
+        out["data_floor"] = data_floor.floor
+        out["data_worst_violation"] = data_floor.worst_violation
+        out["data_active"] = bool(data_floor.active)
+    result: dict[str, Any] = json_safe(out)
+    return result
 
 
 def model_to_json(
@@ -36,7 +103,9 @@ def model_to_json(
     ``rms_error`` = sqrt(mean |H_model - H_data|^2) and ``rel_rms_error`` =
     ||H_model - H_data||_F / ||H_data||_F over all frequencies and entries, taken from
     ``report`` (None when no report is given). ``passive`` is None when not checked and
-    must be True only for a certified model. Extra keys: ``order`` and ``order_reason``.
+    must be True only for a certified model. Extra keys: ``order``, ``order_reason``,
+    ``weighting``, ``point_rel_rms_error`` and ``point_rel_max_error`` (RMS and maximum
+    over frequency of ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F).
     """
     lo, hi = (float(freq_range_hz[0]), float(freq_range_hz[1]))
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo <= hi):
@@ -52,7 +121,12 @@ def model_to_json(
     out["order"] = model.n_poles
     if report is not None:
         out["order_reason"] = report.order_reason
-    return out
+        out["weighting"] = report.weighting
+        out["point_rel_rms_error"] = _finite_or_none(report.point_rel_rms_error)
+        out["point_rel_max_error"] = _finite_or_none(report.point_rel_max_error)
+        out["fit_notes"] = list(report.notes)
+    result: dict[str, Any] = json_safe(out)
+    return result
 
 
 def write_model_json(

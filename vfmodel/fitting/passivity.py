@@ -26,23 +26,28 @@ References
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize_scalar
 
-from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, PassivityWarning
 from vfmodel.fitting._hamiltonian import crossing_frequencies, scaled_model
+
+if TYPE_CHECKING:  # pragma: no cover
+    import skrf
 
 FloatArray = NDArray[np.float64]
 CheckMethod = Literal["auto", "hamiltonian", "sampling"]
 
 _CHUNK = 4096
+_CROSS_CHECK = 3000  # log-spaced points of the sampling cross-check of a certificate
 
 
 @dataclass(frozen=True)
@@ -86,6 +91,11 @@ class PassivityReport:
         ``||H_new - H_old||_F / ||H_data||_F`` over the data frequencies (0 for a check).
     notes : tuple of str
         Remarks (fallbacks, projections).
+    min_margin : float or None
+        Smallest passivity margin (:func:`passivity_margin`, plus the asymptotic margin
+        ``d_margin``) found by the sampling cross-check: a dense log grid over the poles
+        +- 3 decades, 0 Hz, every resonance and both sides of every band edge; negative
+        means a violation. None when not sampled.
     """
 
     passive: bool
@@ -104,6 +114,7 @@ class PassivityReport:
     rms_change: float = 0.0
     rel_rms_change: float = 0.0
     notes: tuple[str, ...] = ()
+    min_margin: float | None = None
 
 
 # ---------------------------------------------------------------------- margins
@@ -166,26 +177,40 @@ def _scale(model: RationalModel) -> float:
 
 # ---------------------------------------------------------------------- classification
 def _edges_from_sampling(
-    model: RationalModel, n_samples: int, tol: float
-) -> tuple[FloatArray, FloatArray]:
-    """Sign changes of the margin on a dense grid, refined by brentq (rad/s)."""
+    model: RationalModel,
+    n_samples: int,
+    tol: float,
+    around: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray, float]:
+    """Sign changes of the margin on a dense grid, refined by brentq (rad/s); also the
+    grid and the smallest margin on it. ``around``: frequencies (rad/s) sampled closely
+    on both sides (band edges of the Hamiltonian test)."""
     mags = np.abs(model.poles) if model.n_poles else np.array([1.0])
     mags = mags[mags > 0] if np.any(mags > 0) else np.array([1.0])
-    grid = [np.logspace(np.log10(mags.min()) - 3, np.log10(mags.max()) + 3, n_samples)]
+    grid = [np.logspace(np.log10(mags.min()) - 6, np.log10(mags.max()) + 4, n_samples)]
     for p in model.poles[model.poles.imag > 0]:
         # resonances: dense points within a few bandwidths of each peak
         grid.append(p.imag + abs(p.real) * np.linspace(-8, 8, 41))
+    if around is not None and around.size:
+        rel = np.array([-3e-2, -1e-3, -1e-6, 1e-6, 1e-3, 3e-2])
+        grid.append((around[:, None] * (1.0 + rel[None, :])).ravel())
     w = np.unique(np.concatenate(grid))
     w = w[w > 0]
     m = passivity_margin(model, w)
+    m_dc = float(passivity_margin(model, [0.0])[0])
     bad = m < -tol
     flips = np.flatnonzero(bad[1:] != bad[:-1])
 
     def f(x: float) -> float:
         return float(passivity_margin(model, [x])[0]) + tol
 
-    edges = [brentq(f, w[i], w[i + 1], xtol=1e-14 * w[i], rtol=1e-15) for i in flips]
-    return np.asarray(edges, dtype=float), w
+    edges = []
+    for i in flips:
+        try:
+            edges.append(brentq(f, w[i], w[i + 1], xtol=1e-14 * w[i], rtol=1e-15))
+        except ValueError:  # the margin sits at the tolerance: the grid point will do
+            edges.append(float(np.sqrt(w[i] * w[i + 1])))
+    return np.asarray(edges, dtype=float), w, min(float(np.min(m)), m_dc)
 
 
 def _classify(
@@ -326,8 +351,28 @@ def check_passivity(
     else:
         used = "sampling"
     if used == "sampling":
-        omega, _ = _edges_from_sampling(model, n_samples, tol)
+        omega, _, min_margin = _edges_from_sampling(model, n_samples, tol)
+    else:
+        # cross-check of the eigenvalue test: a crossing it misses (rounding in a nearly
+        # singular or badly scaled pencil) shows as a sign change on a dense grid, which
+        # also samples both sides of every edge it found, 0 Hz and far beyond the poles
+        edges, _, min_margin = _edges_from_sampling(model, _CROSS_CHECK, tol, around=omega)
+        missed = [x for x in edges if not np.any(np.abs(omega - x) <= 1e-6 * x)]
+        if missed:
+            notes.append(
+                f"dense sampling found {len(missed)} band edge(s) the Hamiltonian "
+                "eigenvalues missed; bands include them"
+            )
+            omega = np.unique(np.concatenate([omega, np.asarray(missed)]))
     bands, crossings = _classify(model, omega, tol)
+    if not bands and min_margin < -tol:  # a sampled violation no interval shows
+        w_dc = 0.0 if float(passivity_margin(model, [0.0])[0]) < -tol else None
+        edges, _, _ = _edges_from_sampling(model, 4 * _CROSS_CHECK, tol, around=omega)
+        omega = np.unique(np.concatenate([omega, edges]))
+        bands, crossings = _classify(model, omega, tol)
+        if not bands and w_dc is not None:
+            bands = [(0.0, float(omega[0]) if omega.size else np.inf)]
+        notes.append("violation found by sampling only")
     if used == "hamiltonian" and bands:
         polished = {w: _polish(model, w, tol) for w in crossings}
         bands = [(polished.get(lo, lo), polished.get(hi, hi)) for lo, hi in bands]
@@ -355,17 +400,19 @@ def check_passivity(
         d_margin=d_margin,
         e_ok=e_ok,
         notes=tuple(notes),
+        min_margin=min(float(min_margin), float(d_margin)),
     )
 
 
 def enforce_passivity(
     model: RationalModel,
-    data: FrequencyData | None = None,
+    data: FrequencyData | skrf.Network | str | os.PathLike[str] | None = None,
     *,
     weighting: Literal["relative", "uniform"] = "relative",
     perturb_d: bool = True,
     max_iter: int = 30,
     margin: float = 1e-6,
+    allow_active: bool = False,
 ) -> tuple[RationalModel, PassivityReport]:
     """Make a stable Z, Y or S model passive with the smallest weighted change of its response.
 
@@ -383,9 +430,10 @@ def enforce_passivity(
     ----------
     model : RationalModel
         Stable Z, Y or S model.
-    data : FrequencyData, optional
+    data : FrequencyData, skrf.Network or path, optional
         Frequencies (and magnitudes, for the relative weighting) of the data the model was
-        fitted to; converted to the model's kind. Default: 400 log-spaced points over the
+        fitted to, taken as :func:`vfmodel.vector_fit` takes them; converted to the
+        model's kind. Default: 400 log-spaced points over the
         model's poles, weighted by the model's own response.
     weighting : {"relative", "uniform"}
         Weight of the change of entry (i, j) at frequency f: ``1 / |H_ij(f)|`` (floored at
@@ -397,6 +445,10 @@ def enforce_passivity(
     margin : float
         Required margin at the cut frequencies, relative: ``min eig(Re H) >=
         margin * ||H||`` (Z, Y) or ``sigma_max(H) <= 1 - margin`` (S); in (0, 0.1).
+    allow_active : bool
+        Enforce even when the data are active (their passivity violation floor,
+        :func:`vfmodel.fitting.data_passivity.data_passivity`, exceeds 5 %); by default
+        that is refused, since a passive model of an amplifier is not a model of it.
 
     Returns
     -------
@@ -406,6 +458,8 @@ def enforce_passivity(
 
     Raises
     ------
+    InputError
+        Active data (unless ``allow_active``), data of another port count.
     PassivityError
         Unstable model, E that cannot be made passive, or no certificate after
         ``max_iter`` programs.
@@ -419,8 +473,25 @@ def enforce_passivity(
     S. Grivet-Talocia, B. Gustavsen (2016), doi:10.1002/9781119140931.
     """
     from vfmodel.fitting._enforce import enforce
+    from vfmodel.fitting.data_passivity import ACTIVE_FLOOR, data_passivity
 
     _check_kind(model)
+    if data is not None:
+        data = as_frequency_data(data, source="enforce_passivity")
+        if data.kind == "H":
+            raise InputError("passivity data must be Z, Y or S", source=data.source)
+        if data.kind != model.kind or (model.kind == "S" and data.z0 != model.z0):
+            data = data.to_kind(model.kind, model.z0)
+        dp = data_passivity(data)
+        if dp is not None and dp.active and not allow_active:
+            raise InputError(
+                "the data are active: no passive model can come closer to them than "
+                f"{100 * dp.floor:.3g} % (largest violation {dp.worst_violation:.3g} at "
+                f"{dp.worst_freq_hz:.6g} Hz); passivity enforcement refused",
+                source=data.source,
+                expected=f"data within {100 * ACTIVE_FLOOR:g} % of passive, or "
+                "allow_active=True",
+            )
     return enforce(
         model,
         data,

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import os
+import warnings
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel._choices import Kind, PoleSpacing, Weighting, check_choice
-from vfmodel.core.frequency_data import FrequencyData
+from vfmodel._choices import DcMode, Kind, PoleSpacing, Weighting, check_choice
+from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitError, FitWarning, InputError
 from vfmodel.fitting import _order, _vf_core
@@ -66,9 +68,16 @@ class FitReport:
     history : tuple of FitStep
         Every pole-relocation iteration in order.
     weighting : str
-        The weighting used ("user" for an array).
+        The weighting used ("user" for an array; "auto" is resolved to what it chose).
     kind : str
         Representation fitted (Z, Y, S or H).
+    point_rel_rms_error, point_rel_max_error : float
+        Per-point relative error e(f) = ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F:
+        its RMS over the frequencies and its maximum (what a user judging an impedance
+        point by point sees, e.g. the MAPE of |Z|).
+    notes : tuple of str
+        Warnings about the fit (also raised as :class:`~vfmodel.errors.FitWarning`), e.g.
+        an error that stays far above the noise floor and why.
     """
 
     order: int
@@ -83,29 +92,32 @@ class FitReport:
     history: tuple[FitStep, ...]
     weighting: str
     kind: str
+    point_rel_rms_error: float = 0.0
+    point_rel_max_error: float = 0.0
+    notes: tuple[str, ...] = ()
 
 
 # ---------------------------------------------------------------------- input handling
 def _as_frequency_data(data: Any, kind: Kind | None) -> FrequencyData:
-    if isinstance(data, FrequencyData):
-        fd = data
-    else:
-        try:
-            import skrf
-        except ImportError:  # pragma: no cover
-            skrf = None
-        if skrf is not None and isinstance(data, skrf.Network):
-            fd = FrequencyData.from_network(data, kind=kind or "S")
-        else:
-            raise InputError(
-                "data must be a FrequencyData or a skrf.Network",
-                source=_SRC,
-                found=type(data).__name__,
-            )
     if kind is not None:
         check_choice("kind", kind, Kind)
-        fd = fd.to_kind(kind)
-    return fd
+    return as_frequency_data(data, kind, source=_SRC)
+
+
+_ALIASES = {"inverse": "inv_abs", "inverse-sqrt": "inv_sqrt_abs"}
+_DECADE_SPAN = 10.0  # "auto": relative weighting when ||H(f)|| spans more than this factor
+
+
+def _resolve_weighting(fd: FrequencyData, weighting: str) -> str:
+    """Name of the weighting "auto" stands for (see :data:`vfmodel._choices.Weighting`)."""
+    if weighting != "auto":
+        return _ALIASES.get(weighting, weighting)
+    if fd.kind == "S":
+        return "uniform"
+    norm = np.linalg.norm(fd.values.reshape(fd.n_freq, -1), axis=1)
+    top = float(np.max(norm))
+    low = float(np.min(norm))
+    return "relative" if low <= 0 or top / low > _DECADE_SPAN else "uniform"
 
 
 def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], str]:
@@ -113,8 +125,13 @@ def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], st
     h = fd.values.reshape(fd.n_freq, -1)
     if isinstance(weighting, str):
         check_choice("weighting", weighting, Weighting)
+        weighting = _resolve_weighting(fd, weighting)
         if weighting == "uniform":
             return np.ones((fd.n_freq, 1)), weighting
+        if weighting == "relative":
+            norm = np.linalg.norm(h, axis=1)
+            norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
+            return (1.0 / np.where(norm > 0, norm, 1.0))[:, None], weighting
         mag = np.abs(h)
         floor = 1e-12 * max(float(np.max(mag)), 1e-300)
         mag = np.maximum(mag, floor)
@@ -123,6 +140,8 @@ def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], st
     w = np.asarray(weighting, dtype=float)
     if w.shape == (fd.n_freq,):
         w = w[:, None]
+    elif w.shape == (1, fd.n_out, fd.n_in):  # per response, every frequency
+        w = np.repeat(w.reshape(1, -1), fd.n_freq, axis=0)
     elif w.shape == fd.values.shape:
         w = w.reshape(fd.n_freq, -1)
     else:
@@ -131,7 +150,7 @@ def _weights(fd: FrequencyData, weighting: Any) -> tuple[NDArray[np.float64], st
             source=_SRC,
             place="weighting",
             found=str(w.shape),
-            expected=f"{(fd.n_freq,)} or {fd.values.shape}",
+            expected=f"{(fd.n_freq,)}, {(1, fd.n_out, fd.n_in)} or {fd.values.shape}",
         )
     if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
         raise InputError(
@@ -163,8 +182,9 @@ def _exclude(w: NDArray[np.float64], exclude: Any, n_freq: int) -> NDArray[np.fl
     return w
 
 
-def _check_data(fd: FrequencyData) -> None:
-    """Reject data no rational fit can represent meaningfully."""
+def _check_data(fd: FrequencyData) -> bool:
+    """Reject data no rational fit can represent; True for frequency-independent data
+    (fitted by D alone, without poles)."""
     src = fd.source or _SRC
     if fd.n_freq < 3:
         raise InputError(
@@ -177,21 +197,34 @@ def _check_data(fd: FrequencyData) -> None:
         raise InputError("no positive frequency", source=src)
     h = fd.values.reshape(fd.n_freq, -1)
     scale = float(np.max(np.abs(h)))
-    if scale == 0.0:
-        raise InputError(
-            "the data is zero at every frequency; there is nothing to fit",
-            source=src,
-            expected="a response that is not identically zero",
-        )
+    if scale == 0.0:  # zero everywhere (Z of a short, Y of an open): D = 0
+        return True
     spread = float(np.max(np.abs(h - h.mean(axis=0, keepdims=True))))
-    if spread <= 1e-12 * scale:
+    if spread > _CONSTANT * scale:
+        return False
+    if float(np.max(np.abs(h.mean(axis=0).imag))) > _CONSTANT * scale:
         raise InputError(
-            "the data does not change with frequency; a rational fit would only "
-            "produce arbitrary poles (use a constant D instead)",
+            "the data is a constant that is not real; no real rational model has a "
+            "frequency-independent complex response",
             source=src,
-            found=f"constant response (spread {spread:.3g} of {scale:.3g})",
-            expected="a frequency-dependent response",
+            expected="a real constant or a frequency-dependent response",
         )
+    return True
+
+
+_CONSTANT = 1e-9  # relative spread over frequency below which the data is a constant
+
+
+_POLE_SPAN = (10.0, 100.0)  # S models: real poles within [f_lo / 10, 100 f_hi]
+
+
+def _pole_bounds(fd: FrequencyData, omega_scale: float) -> tuple[float, float] | None:
+    """Real-pole bounds of S fits (see :class:`_vf_core.Problem`); None for immittances
+    and transfer functions, whose poles near 0 Hz are physical (a capacitor)."""
+    if fd.kind != "S":
+        return None
+    lo = float(fd.omega[fd.omega > 0][0]) / omega_scale
+    return lo / _POLE_SPAN[0], _POLE_SPAN[1]
 
 
 def _max_order(n_freq: int, has_dc: bool, n_extra: int) -> int:
@@ -203,11 +236,11 @@ def _max_order(n_freq: int, has_dc: bool, n_extra: int) -> int:
 
 # ---------------------------------------------------------------------- main entry
 def vector_fit(
-    data: FrequencyData | skrf.Network,
+    data: FrequencyData | skrf.Network | str | os.PathLike[str],
     order: int | Literal["auto"] = "auto",
     *,
     kind: Kind | None = None,
-    weighting: Weighting | NDArray[np.float64] = "uniform",
+    weighting: Weighting | NDArray[np.float64] = "auto",
     spacing: PoleSpacing = "log",
     fit_d: bool = True,
     fit_e: bool = False,
@@ -217,6 +250,8 @@ def vector_fit(
     max_order: int | None = None,
     enforce_stability: bool = True,
     exclude: NDArray[np.intp] | tuple[int, ...] | None = None,
+    dc: DcMode = "enforce",
+    target_error: float | None = None,
 ) -> tuple[RationalModel, FitReport]:
     """Fit a rational model with common poles to every entry of a frequency response.
 
@@ -224,13 +259,16 @@ def vector_fit(
     are complex pairs log- or linearly spaced over the band, each iteration relocates the
     poles with the relaxed sigma system reduced by QR per response (Deschrijver et al.
     2008) and identifies the residues of all responses in one batched least-squares solve.
-    Unstable poles are flipped into the left half plane. With 0 Hz in the data and
-    ``fit_d`` the model matches Re H(0) exactly.
+    Unstable poles are flipped into the left half plane. With 0 Hz in the data,
+    ``fit_d`` and ``dc="enforce"`` the model matches Re H(0) exactly. Data that does not
+    change with frequency (an ideal short, a resistive tee) gives a pole-free model, D
+    alone.
 
     Parameters
     ----------
-    data : FrequencyData or skrf.Network
-        Samples of a Z, Y, S or H response of any port count.
+    data : FrequencyData, skrf.Network or path
+        Samples of a Z, Y, S or H response of any port count (a path is read by
+        :func:`vfmodel.read_spectrum`).
     order : int or "auto"
         Number of poles (each complex pole of a pair counted separately; an odd order has
         one real pole), or "auto": poles are added where the error is largest and spurious
@@ -239,9 +277,14 @@ def vector_fit(
     kind : {"Z", "Y", "S", "H"}, optional
         Representation to fit (data is converted); default: the data's own kind, "S" for a
         skrf.Network.
-    weighting : {"uniform", "inv_abs", "inv_sqrt_abs"} or array
-        Least-squares weights 1, 1/|H|, 1/sqrt|H| per entry, or a user array of shape
-        (n_freq,) or (n_freq, n_out, n_in).
+    weighting : {"auto", "relative", "uniform", "inverse", "inverse-sqrt"} or array
+        Least-squares weights. "relative": 1/||H(f)||_F per frequency, so the fit and the
+        automatic order aim at the per-point relative error; "uniform": 1; "inverse"
+        (alias "inv_abs"): 1/|H_ij|; "inverse-sqrt" ("inv_sqrt_abs"): 1/sqrt|H_ij|.
+        "auto" (default): "relative" for Z, Y and H data whose size spans more than a
+        decade, otherwise "uniform" (S data: "uniform"). A user array (e.g. 1/standard
+        deviation) of shape (n_freq,) per sample, (1, n_out, n_in) per response or
+        (n_freq, n_out, n_in) per sample and response.
     spacing : {"log", "lin"}
         Spacing of the starting poles.
     fit_d, fit_e : bool
@@ -261,6 +304,12 @@ def vector_fit(
         Indices of samples given zero weight (e.g. the spikes found by
         :func:`vfmodel.fitting.artifacts.find_artifacts`); the report's errors still count
         them.
+    dc : {"enforce", "fit"}
+        With a 0 Hz sample: match Re H(0) exactly ("enforce", default) or weigh it like
+        any other sample ("fit").
+    target_error : float, optional
+        Automatic order: stop at this weighted relative RMS error instead of the
+        estimated noise floor.
 
     Returns
     -------
@@ -284,8 +333,11 @@ def vector_fit(
     D. Deschrijver et al., IEEE MWCL 18(6), 2008. doi:10.1109/LMWC.2008.922585
     """
     fd = _as_frequency_data(data, kind)
-    _check_data(fd)
+    constant = _check_data(fd)
     check_choice("spacing", spacing, PoleSpacing)
+    check_choice("dc", dc, DcMode)
+    if target_error is not None and not (np.isfinite(target_error) and target_error > 0):
+        raise InputError("target_error must be positive", found=repr(target_error))
     if not isinstance(max_iterations, int | np.integer) or max_iterations < 1:
         raise InputError("max_iterations must be a positive integer", found=repr(max_iterations))
     if not (np.isfinite(tol) and tol > 0):
@@ -293,6 +345,8 @@ def vector_fit(
     w, wname = _weights(fd, weighting)
     if exclude is not None:
         w = _exclude(w, exclude, fd.n_freq)
+    if constant:
+        return _constant_fit(fd, wname)
     has_dc = bool(fd.freq_hz[0] == 0.0)
     n_extra = int(bool(fit_d)) + int(bool(fit_e))
     limit = _max_order(fd.n_freq, has_dc, n_extra)
@@ -307,7 +361,8 @@ def vector_fit(
         w=w,
         fit_d=bool(fit_d),
         fit_e=bool(fit_e),
-        dc_index=0 if has_dc else None,
+        dc_index=0 if has_dc and dc == "enforce" else None,
+        pole_bounds=_pole_bounds(fd, omega_scale),
     )
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
@@ -331,6 +386,7 @@ def vector_fit(
             max_iterations=max_iterations,
             tol=tol,
             stable=enforce_stability,
+            target=target_error,
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise = auto.reason, auto.noise_floor
@@ -363,9 +419,11 @@ def vector_fit(
     report = _make_report(
         model, fd, prob, coef, n_it, converged, reason, noise, history, wname
     )
+    if order == "auto":
+        report = _far_from_floor(report, fd, limit=cap)
+    for note in report.notes:
+        warnings.warn(note, FitWarning, stacklevel=2)
     if not converged:
-        import warnings
-
         warnings.warn(
             f"vector fitting did not converge in {max_iterations} iterations per order "
             f"(relative RMS error {report.rel_rms_error:.3g}); raise max_iterations or "
@@ -432,6 +490,76 @@ def fit_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float, f
     return rms, rel, float(np.max(np.abs(diff)))
 
 
+def point_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float]:
+    """(RMS, max) over frequency of the per-point relative error
+    ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F (a zero sample counts against 1e-12
+    of the largest)."""
+    diff = np.linalg.norm((model(fd.freq_hz) - fd.values).reshape(fd.n_freq, -1), axis=1)
+    norm = np.linalg.norm(fd.values.reshape(fd.n_freq, -1), axis=1)
+    norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
+    e = diff / np.where(norm > 0, norm, 1.0)
+    return float(np.sqrt(np.mean(e**2))), float(np.max(e))
+
+
+def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitReport]:
+    """Pole-free model of frequency-independent data: D = the (real) mean response."""
+    d = fd.values.mean(axis=0).real
+    model = RationalModel(
+        poles=np.zeros(0, complex),
+        residues=np.zeros((0, fd.n_out, fd.n_in), complex),
+        d=d,
+        kind=fd.kind,
+        z0=fd.z0,
+    )
+    rms, rel, mx = fit_errors(model, fd)
+    prms, pmax = point_errors(model, fd)
+    reason = "constant data: no poles, D alone"
+    return model, FitReport(
+        order=0, n_iterations=0, rms_error=rms, rel_rms_error=rel,
+        weighted_rel_rms_error=rel, max_abs_error=mx, converged=True,
+        order_reason=reason, noise_floor=None, history=(), weighting=wname, kind=fd.kind,
+        point_rel_rms_error=prms, point_rel_max_error=pmax,
+    )
+
+
+_FAR = 3.0  # an automatic fit this many times above the noise floor gets a note
+_DELAY_TURNS = 5.0  # phase turns over the band that point at a delay
+
+
+def _phase_turns(fd: FrequencyData) -> float:
+    """Phase turns over the band of the largest entry (after removing its linear part's
+    sign): a long delay shows as many turns."""
+    h = fd.values.reshape(fd.n_freq, -1)
+    j = int(np.argmax(np.sum(np.abs(h) ** 2, axis=0)))
+    ph = np.unwrap(np.angle(h[:, j]))
+    return float(abs(ph[-1] - ph[0]) / (2 * np.pi))
+
+
+def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitReport:
+    """Add a note when the automatic order stopped far above the noise floor, saying why."""
+    floor = report.noise_floor or 0.0
+    err = report.weighted_rel_rms_error
+    if err <= _FAR * max(floor, 1e-9) or err < 1e-3:
+        return report
+    why = []
+    turns = _phase_turns(fd)
+    if turns > _DELAY_TURNS:
+        why.append(
+            f"the phase turns {turns:.0f} times over the band (a delay of about "
+            f"{turns / max(fd.freq_hz[-1] - fd.freq_hz[0], 1e-300):.3g} s), which costs "
+            "about two poles per turn"
+        )
+    if report.order >= limit - 1:
+        why.append(f"the order limit {limit} was reached (raise max_order)")
+    if not why:
+        why.append("adding poles stopped improving the fit (noisy or non-rational data)")
+    note = (
+        f"the fit error {err:.3g} stays far above the estimated noise floor {floor:.3g} "
+        f"at order {report.order}: " + "; ".join(why)
+    )
+    return replace(report, notes=(*report.notes, note))
+
+
 def _make_report(
     model: RationalModel,
     fd: FrequencyData,
@@ -445,6 +573,7 @@ def _make_report(
     wname: str,
 ) -> FitReport:
     rms, rel, mx = fit_errors(model, fd)
+    prms, pmax = point_errors(model, fd)
     wrel = _vf_core.weighted_rel_rms(prob, _vf_core.evaluate(prob, coef))
     steps = tuple(
         FitStep(r.order, float(r.weighted_rel_rms), float(r.sigma_deviation)) for r in history
@@ -462,4 +591,6 @@ def _make_report(
         history=steps,
         weighting=wname,
         kind=fd.kind,
+        point_rel_rms_error=prms,
+        point_rel_max_error=pmax,
     )

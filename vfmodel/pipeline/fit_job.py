@@ -19,14 +19,15 @@ from typing import Literal
 
 import numpy as np
 
-from vfmodel._choices import Kind
+from vfmodel._choices import DcMode, Kind, Weighting
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
-from vfmodel.errors import FitWarning, InputError
+from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
+from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
-from vfmodel.fitting.vectfit import FitReport, fit_errors, vector_fit
+from vfmodel.fitting.vectfit import FitReport, fit_errors, point_errors, vector_fit
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,7 @@ class FitJobResult:
     rms_error: float
     rel_rms_error: float
     artifacts: DataArtifacts | None = None
+    data_passivity: DataPassivity | None = None
 
 
 def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> FrequencyData:
@@ -84,14 +86,22 @@ def run_fit(
     *,
     order: int | Literal["auto"] = "auto",
     kind: Kind | None = None,
-    weighting: Literal["uniform", "inv_abs", "inv_sqrt_abs"] = "uniform",
+    weighting: Weighting = "auto",
     passive: bool = False,
     clean: bool = True,
     progress: Progress = no_progress,
+    max_order: int | None = None,
+    target_error: float | None = None,
+    dc: DcMode = "enforce",
+    enforce_iterations: int = 30,
+    enforce_margin: float = 1e-6,
 ) -> FitJobResult:
     """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
 
     ``clean``: leave export padding and isolated spikes out of the fit (module docstring).
+    The data's own passivity violation floor is measured first; with ``passive``, active
+    data (floor above 5 %) are refused, and an enforcement that finds no certificate is
+    reported as an :class:`InputError` naming the options that control it.
     """
     data = combine_spectra(spectra, kind)
     art: DataArtifacts | None = None
@@ -108,15 +118,37 @@ def run_fit(
             data = FrequencyData(data.freq_hz[:k], data.values[:k], kind=data.kind,
                                  z0=data.z0, labels=data.labels, source=data.source)
             spikes = art.spikes
+    dp = data_passivity(data)
+    if passive and dp is not None and dp.active:
+        raise InputError(
+            "the data are active (gain): a passive model cannot come closer to them than "
+            f"{100 * dp.floor:.3g} % (largest violation {dp.worst_violation:.3g} at "
+            f"{dp.worst_freq_hz:.6g} Hz); passivity enforcement refused",
+            source=data.source,
+            expected="passive data for --passive (fit without --passive to model an "
+            "active device)",
+        )
     progress("vector fit", 0, 2 if passive else 1)
-    model, report = vector_fit(data, order=order, weighting=weighting, exclude=spikes or None)
+    model, report = vector_fit(data, order=order, weighting=weighting, exclude=spikes or None,
+                               max_order=max_order, target_error=target_error, dc=dc)
     _, unconstrained_rel, _ = fit_errors(model, data)
     progress("vector fit", 1, 2 if passive else 1)
     pas: PassivityReport | None = None
     if data.kind in ("Z", "Y", "S") and data.n_out == data.n_in:
         pas = check_passivity(model)
         if passive and not pas.passive:
-            model, pas = enforce_passivity(model, data)
+            try:
+                model, pas = enforce_passivity(
+                    model, data, max_iter=enforce_iterations, margin=enforce_margin,
+                    allow_active=True,
+                )
+            except PassivityError as err:
+                raise InputError(
+                    f"passivity enforcement found no certificate: {err}",
+                    source=data.source,
+                    expected="a model that can be made passive: raise "
+                    "--enforce-iterations, change --enforce-margin or lower the order",
+                ) from None
     elif passive:
         raise InputError(
             "passivity is defined for square Z, Y or S data only",
@@ -127,4 +159,6 @@ def run_fit(
         progress("vector fit", 2, 2)
     rms, rel, _ = fit_errors(model, data)
     report = replace(report, rms_error=rms, rel_rms_error=rel)  # errors of the final model
-    return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art)
+    prms, pmax = point_errors(model, data)
+    report = replace(report, point_rel_rms_error=prms, point_rel_max_error=pmax)
+    return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
