@@ -97,6 +97,7 @@ def read_model_netlist(model: Path) -> Circuit:
     from vfmodel.circuit.spice_import import from_spice
     from vfmodel.core._text import read_text_file
     from vfmodel.errors import CircuitError
+    from vfmodel.pipeline.predict import check_model_nodes
 
     text = read_text_file(model, "model netlist")
     try:
@@ -107,6 +108,7 @@ def read_model_netlist(model: Path) -> Circuit:
         if not msg.startswith(str(model)):
             msg = f"{model}: {msg}"
         raise InputError(msg) from None
+    check_model_nodes(circ, str(model))
     return circ
 
 

@@ -26,8 +26,8 @@ from vfmodel.greybox.bench import CableSpec, InverterSpec, ScopeSpec, steady_sta
 from vfmodel.greybox.metrics import F_CUT_HZ, peak_errors, peak_v, spectral_corr
 from vfmodel.signals.filters import brickwall_filter
 
-__all__ = ["Prediction", "check_inverter_options", "inverter_options", "predict_inverter",
-           "predict_recording"]
+__all__ = ["Prediction", "check_inverter_options", "check_model_nodes", "inverter_options",
+           "predict_inverter", "predict_recording"]
 
 ArrF = NDArray[np.float64]
 
@@ -43,7 +43,8 @@ class Prediction:
     summary: dict[str, object]
 
 
-def _check_nodes(circ: Circuit, source: str | None = None) -> None:
+def check_model_nodes(circ: Circuit, source: str | None = None) -> None:
+    """InputError (naming ``source``) unless the netlist has the grey-box nodes."""
     missing = [n for n in (*PHASES, BEARING_NODE) if n not in circ.nodes]
     if missing:
         raise InputError("model netlist lacks the grey-box nodes", source=source,
@@ -66,7 +67,7 @@ def _summary(fs: float, u_b: ArrF, meas: ArrF | None) -> dict[str, object]:
 
 def predict_recording(model: Circuit, rec: Recording) -> Prediction:
     """Periodic steady-state ``u_B`` for the (10 MHz filtered) terminals of ``rec``."""
-    _check_nodes(model)
+    check_model_nodes(model)
     fs = rec.fs
     x = brickwall_filter(rec.terminals, fs, F_CUT_HZ)
     n = x.shape[1]
@@ -166,7 +167,7 @@ def check_inverter_options(
 def predict_inverter(model: Circuit, options: Mapping[str, float]) -> Prediction:
     """Periodic steady state of inverter + cable + model network (keys: inverter_options)."""
     inv, cable, scope, speed = check_inverter_options(options)
-    _check_nodes(model)
+    check_model_nodes(model)
     y = steady_state(model, inv, cable, scope, speed)
     fs = scope.fs_hz
     x = brickwall_filter(y[:3], fs, F_CUT_HZ)
