@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -34,21 +35,57 @@ def _order(value: str) -> int | str:
               help="Number of poles (conjugate poles counted separately) or 'auto'.")
 @click.option("--kind", type=click.Choice(["Z", "Y", "S", "H"]), default=None,
               help="Representation to fit (default: the data's).")
-@click.option("--weighting", type=click.Choice(["uniform", "inv_abs", "inv_sqrt_abs"]),
-              default="uniform", show_default=True, help="Least-squares weights.")
+@click.option("--weight", "--weighting", "weighting",
+              type=click.Choice(["auto", "relative", "uniform", "inverse", "inverse-sqrt",
+                                 "inv_abs", "inv_sqrt_abs"]),
+              default="auto", show_default=True,
+              help="Least-squares weights: relative = 1/||H(f)|| per frequency (per-point "
+              "relative accuracy), uniform, inverse = 1/|H_ij|, inverse-sqrt = "
+              "1/sqrt|H_ij|; auto = relative for Z/Y/H data spanning decades, else uniform.")
+@click.option("--max-order", type=click.IntRange(min=1), default=None,
+              help="Upper limit of the automatic order.")
+@click.option("--target-error", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Automatic order: stop at this weighted relative RMS error instead of "
+              "the estimated noise floor.")
+@click.option("--dc", type=click.Choice(["enforce", "fit"]), default="enforce",
+              show_default=True, help="A 0 Hz sample: matched exactly or fitted like "
+              "the others.")
 @click.option("--passive", is_flag=True, help="Enforce passivity (certified by the "
-              "Hamiltonian test) with a convex program.")
+              "Hamiltonian test and a sampling cross-check) with a convex program.")
+@click.option("--enforce-iterations", type=click.IntRange(min=1), default=30,
+              show_default=True, help="Convex programs of the passivity enforcement.")
+@click.option("--enforce-margin", type=click.FloatRange(min=0, max=0.1, min_open=True,
+                                                        max_open=True),
+              default=1e-6, show_default=True,
+              help="Relative passivity margin required at the cut frequencies.")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="Also write a SPICE subcircuit '.subckt vfmodel p1..pN ref'.")
+              default=None, help="Also write a SPICE subcircuit '.subckt NAME p1..pN ref'.")
+@click.option("--subckt-name", default="vfmodel", show_default=True,
+              help="Name of the SPICE subcircuit.")
 @click.option("--no-plot", is_flag=True, help="Do not write fit.png.")
 @out_option
 @quiet_option
 def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
-        passive: bool, spice: Path | None, no_plot: bool, out_dir: Path, quiet: bool) -> None:
+        max_order: int | None, target_error: float | None, dc: str, passive: bool,
+        enforce_iterations: int, enforce_margin: float, spice: Path | None,
+        subckt_name: str, no_plot: bool, out_dir: Path, quiet: bool) -> None:
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
     model with common poles; several files make a block-diagonal model. Writes
-    DIR/model.json (CONTRACT section 4) and DIR/fit.png."""
+    DIR/model.json (CONTRACT section 4) and DIR/fit.png.
+
+    Also reported: the per-point relative error (RMS and max over frequency of
+    ||H_model - H|| / ||H||) and, for square Z/Y/S data, the data's own passivity
+    violation floor (relative distance of the samples to the nearest passive ones);
+    active data are refused by --passive."""
+    import re
+
     n_order = _order(order)
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.\-]*", subckt_name):
+        raise click.BadParameter(f"{subckt_name!r}: expected a SPICE name (letters, digits, "
+                                 "_ . -, starting with a letter or _)",
+                                 param_hint="--subckt-name")
+    opts = {"max_order": max_order, "target_error": target_error, "dc": dc,
+            "enforce_iterations": enforce_iterations, "enforce_margin": enforce_margin}
     if spice is not None and spice.suffix.lower() not in (".cir", ".sp", ".spice", ".lib",
                                                           ".sub", ".subckt", ".net"):
         raise InputError("unknown SPICE file suffix", source=str(spice),
@@ -58,30 +95,26 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
     with staged_output(out_dir, owned=FIT_OUTPUTS) as stage:
         spice_tmp = None if spice is None else stage.extra(spice, "--spice")
         _fit(spectra, n_order, kind, weighting, passive, spice, spice_tmp, no_plot, out_dir,
-             stage.dir, quiet)
+             stage.dir, quiet, subckt_name, opts)
 
 
 def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weighting: str,
          passive: bool, spice: Path | None, spice_tmp: Path | None, no_plot: bool,
-         out_dir: Path, stage: Path, quiet: bool) -> None:
+         out_dir: Path, stage: Path, quiet: bool, subckt_name: str,
+         opts: dict[str, Any]) -> None:
     """Fit and write every output into the staging folder ``stage``."""
-    from vfmodel.fitting.model_json import model_to_json
+    from vfmodel.fitting.model_json import model_to_json, passivity_to_json
     from vfmodel.pipeline.fit_job import run_fit
 
     data = [read_spectrum(p) for p in spectra]
     res = run_fit(data, order=n_order, kind=kind, weighting=weighting,  # type: ignore[arg-type]
-                  passive=passive, progress=progress_bar(quiet))
+                  passive=passive, progress=progress_bar(quiet), **opts)
     f = res.data.freq_hz
     obj = model_to_json(res.model, res.fit, (float(f[0]), float(f[-1])),
                         None if res.passivity is None else res.passivity.passive)
     if res.passivity is not None:
-        obj["passivity"] = {
-            "method": res.passivity.method,
-            "bands_hz": [list(b) for b in res.passivity.bands_hz],
-            "worst_violation": res.passivity.worst_violation,
-            "enforcement_iterations": res.passivity.iterations,
-            "unconstrained_rel_rms_error": res.unconstrained_rel_rms_error,
-        }
+        obj["passivity"] = passivity_to_json(res.passivity, res.unconstrained_rel_rms_error,
+                                             res.data_passivity)
     obj["order_reason"] = res.fit.order_reason
     obj["sources"] = [str(p) for p in spectra]
     from vfmodel.cli._common import write_json
@@ -89,7 +122,7 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
     if spice_tmp is not None:
         from vfmodel.circuit.synthesis import model_to_spice
 
-        spice_tmp.write_text(model_to_spice(res.model, name="vfmodel"), encoding="utf-8")
+        spice_tmp.write_text(model_to_spice(res.model, name=subckt_name), encoding="utf-8")
     write_json(stage / "model.json", obj)
     if not no_plot:
         from vfmodel.report.fit_figures import plot_fit
@@ -101,5 +134,11 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
     click.echo(f"fitted {res.data.n_out}x{res.data.n_in} {res.data.kind}, "
                f"{res.model.n_poles} poles ({res.fit.order_reason})")
     click.echo(f"rel RMS error {res.rel_rms_error:.3e} (unconstrained "
-               f"{res.unconstrained_rel_rms_error:.3e}); {status}")
+               f"{res.unconstrained_rel_rms_error:.3e}); per point: RMS "
+               f"{res.fit.point_rel_rms_error:.3e}, max {res.fit.point_rel_max_error:.3e} "
+               f"(weighting {res.fit.weighting}); {status}")
+    dp = res.data_passivity
+    if dp is not None:
+        click.echo(f"data passivity floor {dp.floor:.3e} (largest violation of the data "
+                   f"{dp.worst_violation:.3g}" + (", ACTIVE data" if dp.active else "") + ")")
     click.echo(f"wrote {out_dir / 'model.json'}" + (f", {spice}" if spice else ""))
