@@ -112,6 +112,12 @@ def _main(argv: list[str] | None) -> int:
     except click.exceptions.Abort:  # click turns KeyboardInterrupt into Abort
         click.echo("vfmodel: interrupted", err=True)
         return 130
+    except click.UsageError as ex:  # one line, like every other bad input
+        where = f" (see 'vfmodel {ex.ctx.command_path.partition(' ')[2] or ''} --help')" \
+            if ex.ctx is not None else ""
+        msg = " ".join(ex.format_message().split())
+        click.echo(f"vfmodel: error: {msg}{where.replace('  ', ' ')}", err=True)
+        return 2
     except click.ClickException as ex:
         ex.show()
         return 2

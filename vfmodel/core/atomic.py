@@ -117,6 +117,13 @@ def check_output_place(path: str | os.PathLike[str], option: str, *, directory: 
     if not os.access(anchor, os.W_OK | os.X_OK):
         raise _place_error("output place is not writable", shown, option,
                            f"no write permission in {anchor}")
+    try:  # the permission bits do not tell everything (root, read-only or special mounts)
+        fd, probe = tempfile.mkstemp(prefix=".vfmodel-probe-", dir=anchor)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as err:
+        raise _place_error("output place is not writable", shown, option,
+                           err.strerror or type(err).__name__) from None
     return anchor
 
 
