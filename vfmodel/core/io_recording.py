@@ -73,8 +73,8 @@ def read_recording(path: str | Path, speed_rpm: float | None = None) -> Recordin
     )
 
 
-MAX_SAMPLES = 2**24
-"""Longest recording accepted: 16.8 million samples per channel (checked from the array
+MAX_SAMPLES = 2**26
+"""Longest recording accepted: 67 million samples per channel (checked from the array
 headers before anything is allocated)."""
 EXTRA_ARRAYS = ("u_B_DE", "i_CM")
 """Further channels a recording may hold (CONTRACT section 2a); read but not yet used."""
