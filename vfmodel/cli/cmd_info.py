@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from vfmodel.cli._common import finite_json
+
 
 @click.command()
 @click.argument("dataset", type=click.Path(path_type=Path))
@@ -18,7 +20,7 @@ def info(dataset: Path, as_json: bool) -> None:
 
     summary = dataset_summary(read_dataset(dataset))
     if as_json:
-        click.echo(json.dumps(summary, indent=2))
+        click.echo(json.dumps(finite_json(summary), indent=2, allow_nan=False))
         return
     click.echo(f"dataset {summary['name']}  ({summary['root']})")
     if summary["description"]:
