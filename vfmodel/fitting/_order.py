@@ -37,7 +37,10 @@ from numpy.typing import NDArray
 
 from vfmodel.fitting import _vf_core as core
 
-_NOISE_MARGIN = 1.25  # stop when the weighted error is within this factor of the floor
+NOISE_MARGIN = 1.25  # stop when the weighted error is within this factor of the floor
+# per-point relative weighting: each point's error counts alike, so the error of the model
+# against the truth is sqrt(margin^2 - 1) ~ 0.5 of the noise at 1.12 (0.75 at 1.25)
+RELATIVE_MARGIN = 1.12
 _MIN_GAIN = 0.10  # a growth step that gains less than 10 % marks the plateau
 _GROW_ITERATIONS = 1  # pole relocations per growth step (warm started)
 _GROW_TOL = 0.02  # relative error change that ends a growth step early
@@ -186,6 +189,7 @@ def auto_order(
     tol: float,
     stable: bool,
     target: float | None = None,
+    margin: float = NOISE_MARGIN,
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
@@ -200,7 +204,7 @@ def auto_order(
     from a converged trial. With ``target`` the floor is ``target / 1.25`` instead of the
     noise estimate (the order stops at the requested error).
     """
-    noise = estimate_noise(prob) if target is None else target / _NOISE_MARGIN
+    noise = estimate_noise(prob) if target is None else target / margin
     data_rms = float(np.sqrt(np.mean(np.abs(prob.wh) ** 2)))
     reps = core.starting_poles(min(max_order, _START_ORDER), w_lo, w_hi, spacing)
     history: list[core.IterationRecord] = []
@@ -225,9 +229,9 @@ def auto_order(
         err = err_last = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         n = core.n_poles(coef.reps)
         tried.append((n, err, coef))
-        if target is None and err <= _RESIDUAL_CHECK * _NOISE_MARGIN * noise:  # refine
+        if target is None and err <= _RESIDUAL_CHECK * margin * noise:  # refine
             noise = min(noise, _residual_noise(prob, coef))
-        if err <= _NOISE_MARGIN * max(noise, _EXACT / _NOISE_MARGIN):
+        if err <= margin * max(noise, _EXACT / margin):
             why = "noise"
             break
         # plateau: poles added since the last 10 % gain amount to a quarter of the order
@@ -249,8 +253,8 @@ def auto_order(
         reps = core.sort_reps(np.concatenate([coef.reps, new]))
     best_err = min(t[1] for t in tried)
     # at the noise floor the last model is the pick; at a plateau the best error is the floor
-    floor = max(noise if why == "noise" else best_err, _EXACT / _NOISE_MARGIN)
-    limit = max(_NOISE_MARGIN * floor, tried[-1][1] if why == "noise" else 0.0)
+    floor = max(noise if why == "noise" else best_err, _EXACT / margin)
+    limit = max(margin * floor, tried[-1][1] if why == "noise" else 0.0)
     pick = min((t for t in tried if t[1] <= limit), key=lambda t: (t[0], t[1]), default=None)
     if pick is None:  # only when the maximum order stopped the growth
         pick = min(tried, key=lambda t: (t[1], t[0]))
@@ -297,18 +301,18 @@ def auto_order(
     if why == "noise" and target is not None:
         reason = f"order {n}: weighted relative RMS error {err:.3g} within the target {target:.3g}"
     elif why == "noise":
-        if noise * _NOISE_MARGIN <= _EXACT:
+        if noise * margin <= _EXACT:
             reason = f"exact fit: weighted relative RMS error {err:.3g} at order {n}"
         else:
             reason = (
                 f"order {n}: weighted relative RMS error {err:.3g} is within a factor "
-                f"{_NOISE_MARGIN} of the estimated noise floor {noise:.3g}"
+                f"{margin} of the estimated noise floor {noise:.3g}"
             )
     elif why == "plateau":
         reason = (
             f"order {n}: adding poles stopped paying (less than {100 * _MIN_GAIN:.0f} % gain) "
             f"above the noise floor estimate {noise:.3g}; smallest order within a factor "
-            f"{_NOISE_MARGIN} of the best error {best_err:.3g} (error {err:.3g})"
+            f"{margin} of the best error {best_err:.3g} (error {err:.3g})"
         )
     else:
         reason = (

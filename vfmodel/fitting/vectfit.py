@@ -387,6 +387,7 @@ def vector_fit(
             tol=tol,
             stable=enforce_stability,
             target=target_error,
+            margin=_order.RELATIVE_MARGIN if wname == "relative" else _order.NOISE_MARGIN,
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise = auto.reason, auto.noise_floor
