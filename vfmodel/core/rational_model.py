@@ -194,6 +194,22 @@ class RationalModel:
         f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         return self.evaluate_s(2j * np.pi * f)
 
+    def to_network(self, freq_hz: ArrayLike, z0: float | None = None) -> Any:
+        """The model's response at ``freq_hz`` as a :class:`skrf.Network` (S-parameters at
+        ``z0``, default the model's own z0 or 50 ohm); ``write_touchstone`` on it gives a
+        Touchstone file. Z, Y and S models only."""
+        from vfmodel.core.frequency_data import FrequencyData
+
+        if self.kind == "H" or self.n_out != self.n_in:
+            raise InputError(
+                "only square Z, Y or S models are networks",
+                source="RationalModel.to_network",
+                found=f"{self.kind} {self.n_out}x{self.n_in}",
+            )
+        f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+        data = FrequencyData(f, self(f), kind=self.kind, z0=self.z0)
+        return data.to_network(z0=z0)
+
     # ------------------------------------------------------------------ realisation
     def to_state_space(self) -> StateSpace:
         """Real realisation (A, B, C, D, E), n_in states per real pole, 2 n_in per pair.

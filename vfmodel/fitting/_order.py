@@ -52,6 +52,7 @@ _RESIDUAL_CHECK = 4.0  # refine the noise floor from the residual within this fa
 _REDUCE_TRIALS = 2  # one-pole-less trials after pruning (each continues only on success)
 _SEED_DAMPING = 0.03  # damping ratio of re-seeded pairs
 _TRIAL_TOL = 0.01  # relative error change that ends a trial
+_TRIAL_ITERATIONS = 4  # relocations of a one-pole-less trial at most
 _FINAL_PATIENCE = 2  # relocations without improvement that end a trial or the final fit
 _WINDOW = 11  # samples of the local median of the noise estimator
 
@@ -267,7 +268,7 @@ def auto_order(
         trial = core.iterate(
             prob,
             _reseed(_one_pole_less(prob, coef.reps, w_lo), w_lo),
-            max_iterations=max_iterations,
+            max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
             tol=_TRIAL_TOL,
             stable=stable,
             precise=None,

@@ -1,0 +1,242 @@
+"""vfbench: vfmodel against scikit-rf on every Touchstone file scikit-rf ships and on the
+public files of data/vfbench (sources and licences in data/vfbench/README.md), in one run.
+
+    .venv/bin/python scripts/vfbench.py [--runs 3] [--no-skrf-passive] [--extra DIR ...]
+                                        [--files GLOB] [--markdown]
+
+Per file and tool: ports, points, automatic order (every pole counted), relative RMS
+error ||H_model - H_data||_F / ||H_data||_F of the S-parameters, median fit time over
+``--runs`` (small files: 1-2 ports, <= 2000 points; one run otherwise), the data's own
+passivity violation floor (:mod:`vfmodel.fitting.data_passivity`), the error after
+passivity enforcement, and whether the enforced model is passive by an *independent*
+dense check: the largest singular value on 200,000 log-spaced frequencies from 1e-4 x
+the lowest to 1e4 x the highest data frequency, the data frequencies and 0 Hz must not
+exceed 1 + 1e-9. "cert" is vfmodel's own certificate (Hamiltonian test with sampling
+cross-check), "skrf-pas" scikit-rf's ``is_passive()`` after ``passivity_enforce()``.
+Files vfmodel refuses (fewer than 3 points, active data for enforcement) say why.
+
+``--extra DIR`` adds every Touchstone file of DIR (e.g. files that may not be
+redistributed). Both tools fit S-parameters with their automatic order; BLAS runs on one
+thread (set before numpy loads).
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import os
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+_SMALL = (2, 2000)  # ports, points of a "small" file (timed over --runs)
+
+
+def _args() -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--runs", type=int, default=3)
+    p.add_argument("--no-skrf-passive", action="store_true",
+                   help="skip scikit-rf's passivity_enforce (slow on large files)")
+    p.add_argument("--extra", action="append", default=[], help="more Touchstone folders")
+    p.add_argument("--files", default=None, help="only files whose name matches this glob")
+    p.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    return p.parse_args()
+
+
+def _files(extra: list[str], pattern: str | None) -> list[Path]:
+    import fnmatch
+
+    import skrf
+
+    skrf_data = Path(skrf.__file__).parent / "data"
+    out = sorted(p for p in skrf_data.iterdir() if p.suffix.lower()[:2] == ".s")
+    out += sorted(p for p in (ROOT / "data" / "vfbench").iterdir()
+                  if p.suffix.lower()[:2] == ".s" and p.suffix.lower().endswith("p"))
+    for d in extra:
+        out += sorted(Path(x) for x in glob.glob(str(Path(d) / "*.[sS]*[pP]")))
+    if pattern:
+        out = [p for p in out if fnmatch.fnmatch(p.name, pattern)]
+    return out
+
+
+def _dense_sigma(model: Any, f_data: Any) -> float:
+    """Largest singular value of an S model on an independent dense grid (module doc)."""
+    import numpy as np
+
+    pos = f_data[f_data > 0]
+    grid = np.concatenate([[0.0], f_data,
+                           np.geomspace(pos[0] * 1e-4, pos[-1] * 1e4, 200_000)])
+    worst = 0.0
+    for k in range(0, grid.size, 8192):
+        h = model(grid[k:k + 8192])
+        worst = max(worst, float(np.max(np.linalg.svd(h, compute_uv=False)[:, 0])))
+    return worst
+
+
+def _median_time(fn: Any, runs: int) -> tuple[Any, float]:
+    times, out = [], None
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return out, statistics.median(times)
+
+
+def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any) -> dict[str, Any]:
+    import numpy as np
+    import skrf
+
+    def fit() -> Any:
+        vf = skrf.vectorFitting.VectorFitting(net)
+        vf.auto_fit()
+        return vf
+
+    n = h.shape[1]
+
+    def resp(vf: Any) -> Any:
+        return np.stack([[vf.get_model_response(i, j, f) for j in range(n)]
+                         for i in range(n)]).transpose(2, 0, 1)
+
+    vf, t = _median_time(fit, runs)
+    row: dict[str, Any] = {
+        "order": int(np.sum(vf.poles.imag == 0) + 2 * np.sum(vf.poles.imag != 0)),
+        "err": float(np.linalg.norm(resp(vf) - h) / np.linalg.norm(h)), "time": t,
+    }
+    if passive:
+        try:
+            if not vf.is_passive():
+                vf.passivity_enforce()
+            row["err_pas"] = float(np.linalg.norm(resp(vf) - h) / np.linalg.norm(h))
+            row["pas"] = bool(vf.is_passive())
+        except Exception as err:
+            row["note"] = f"passivity_enforce: {type(err).__name__}"
+    return row
+
+
+def _vf_case(path: Path, runs: int) -> dict[str, Any]:
+    import numpy as np
+
+    from vfmodel import read_spectrum
+    from vfmodel.errors import InputError, VfmodelError
+    from vfmodel.fitting.data_passivity import data_passivity
+    from vfmodel.fitting.passivity import enforce_passivity
+    from vfmodel.fitting.vectfit import fit_errors, vector_fit
+    from vfmodel.pipeline.fit_job import run_fit
+
+    row: dict[str, Any] = {}
+    try:
+        data = read_spectrum(path).to_kind("S")
+        row["ports"], row["points"] = data.n_out, data.n_freq
+        small = data.n_out <= _SMALL[0] and data.n_freq <= _SMALL[1]
+        res, t = _median_time(lambda: run_fit([data]), runs if small else 1)
+        (_, t_fit) = _median_time(lambda: vector_fit(res.data), runs if small else 1)
+        row.update(order=res.model.n_poles, err=res.rel_rms_error, time=t_fit,
+                   small=small, job_time=t)
+        dp = data_passivity(res.data)
+        row["floor"] = dp.floor if dp is not None else None
+        if dp is not None and dp.active:
+            row["note"] = f"active data (floor {dp.floor:.2g}): enforcement refused"
+            return row
+        model, check = res.model, res.passivity
+        if check is not None and not check.passive:
+            model, check = enforce_passivity(model, res.data)
+        row["err_pas"] = fit_errors(model, res.data)[1]
+        row["cert"] = bool(check is not None and check.passive)
+        row["sigma"] = _dense_sigma(model, res.data.freq_hz)
+        row["pas"] = row["sigma"] <= 1 + 1e-9
+        row["model_data"] = (res.data.freq_hz, res.data.values)
+        del np
+    except InputError as err:
+        row["note"] = f"refused (exit 2): {str(err).split(': ', 1)[-1][:70]}"
+    except VfmodelError as err:
+        row["note"] = f"FAILED: {type(err).__name__}: {str(err)[:60]}"
+    except Exception as err:
+        row["note"] = f"INTERNAL ERROR: {type(err).__name__}: {str(err)[:60]}"
+    return row
+
+
+def _fmt(x: Any, spec: str = ".2e") -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "NO"
+    return format(x, spec)
+
+
+def main() -> int:
+    args = _args()
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+    import skrf
+
+    sys.path.insert(0, str(ROOT))
+    warnings.simplefilter("ignore")
+    cols = ["file", "ports", "points", "order vf/skrf", "error vf", "error skrf",
+            "time vf s", "time skrf s", "floor", "err pas vf", "err pas skrf",
+            "passive vf (cert)", "passive skrf", "note"]
+    sep = " | " if args.markdown else "  "
+    if args.markdown:
+        print("| " + sep.join(cols) + " |")
+        print("|" + "---|" * len(cols))
+    else:
+        print(sep.join(cols))
+    stats: dict[str, list[Any]] = {"ratio_err": [], "small_t": [], "enf": [], "bad": []}
+    for path in _files(args.extra, args.files):
+        vf = _vf_case(path, args.runs)
+        sk: dict[str, Any] = {}
+        md = vf.pop("model_data", None)
+        if md is not None:
+            try:
+                net = skrf.Network(str(path))
+                runs = args.runs if vf.get("small") else 1
+                sk = _skrf_case(net, runs, not args.no_skrf_passive, md[0], md[1])
+            except Exception as err:
+                sk = {"note": f"skrf: {type(err).__name__}: {str(err)[:50]}"}
+        if "err" in vf and "err" in sk:
+            stats["ratio_err"].append((path.name, vf["err"], sk["err"]))
+        if vf.get("small") and "time" in sk:
+            stats["small_t"].append((vf["time"], sk["time"]))
+        if "err_pas" in vf:
+            bound = max(vf["err"], vf["floor"] or 0.0)
+            stats["enf"].append((path.name, vf["err_pas"], bound))
+        if "INTERNAL" in vf.get("note", "") or vf.get("pas") is False:
+            stats["bad"].append(path.name)
+        cells = [path.name, _fmt(vf.get("ports"), "d"), _fmt(vf.get("points"), "d"),
+                 f"{_fmt(vf.get('order'), 'd')}/{_fmt(sk.get('order'), 'd')}",
+                 _fmt(vf.get("err")), _fmt(sk.get("err")), _fmt(vf.get("time"), ".3f"),
+                 _fmt(sk.get("time"), ".3f"), _fmt(vf.get("floor"), ".1e"),
+                 _fmt(vf.get("err_pas")), _fmt(sk.get("err_pas")),
+                 f"{_fmt(vf.get('pas'))} ({_fmt(vf.get('cert'))})", _fmt(sk.get("pas")),
+                 "; ".join(x for x in (vf.get("note", ""), sk.get("note", "")) if x)]
+        line = sep.join(cells)
+        print(f"| {line} |" if args.markdown else line, flush=True)
+    _summary(stats)
+    return 0
+
+
+def _summary(stats: dict[str, list[Any]]) -> None:
+    import numpy as np
+
+    r = stats["ratio_err"]
+    ok = [n for n, a, b in r if a <= 1.1 * b or a < 1e-9]
+    print(f"\nerror <= 1.1 x scikit-rf's (or < 1e-9): {len(ok)} of {len(r)} files both fit")
+    if stats["small_t"]:
+        tv, ts = np.median([a for a, _ in stats["small_t"]]), np.median(
+            [b for _, b in stats["small_t"]])
+        print(f"small files ({len(stats['small_t'])}): median fit time vfmodel {tv:.4f} s, "
+              f"scikit-rf {ts:.4f} s")
+    enf = stats["enf"]
+    within = [n for n, e, b in enf if e <= 1.2 * b]
+    print(f"enforced error <= 1.2 x max(fit error, data floor): {len(within)} of {len(enf)}; "
+          "beyond: " + ", ".join(f"{n} ({e / max(b, 1e-300):.3g}x)" for n, e, b in enf
+                                 if n not in within))
+    print("internal errors or enforced models failing the dense check: "
+          + (", ".join(stats["bad"]) or "none"))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

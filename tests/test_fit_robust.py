@@ -1,0 +1,181 @@
+"""Fits that hold on real files (issue 13): constant data, strict JSON, certificates that
+agree with dense sampling, one data argument, active data, per-point relative accuracy.
+
+References: the scikit-rf example files (as shipped with the installed package), the
+public transistor file of data/vfbench (scikit-rf docs, BSD-3), analytic responses.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import skrf
+
+from vfmodel.cli.main import main as cli_main
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_spectrum import read_spectrum
+from vfmodel.errors import FitWarning, InputError
+from vfmodel.fitting.artifacts import find_artifacts
+from vfmodel.fitting.data_passivity import data_passivity
+from vfmodel.fitting.model_json import model_to_json, read_model_json
+from vfmodel.fitting.passivity import check_passivity, enforce_passivity, passivity_margin
+from vfmodel.fitting.vectfit import vector_fit
+from vfmodel.pipeline.fit_job import run_fit
+
+SKRF_DATA = Path(skrf.__file__).parent / "data"
+VFBENCH = Path(__file__).resolve().parents[1] / "data" / "vfbench"
+
+
+def _dense_min_margin(model: object, f_lo: float, f_hi: float) -> float:
+    """Smallest margin on 200,000 log points from 1e-4 f_lo to 1e4 f_hi and at 0 Hz."""
+    w = 2 * np.pi * np.concatenate([[0.0], np.geomspace(f_lo * 1e-4, f_hi * 1e4, 200_000)])
+    return float(np.min(passivity_margin(model, w)))  # type: ignore[arg-type]
+
+
+# ---------------------------------------------------------------------- constant data
+@pytest.mark.parametrize("name", ["short.s1p", "wr2p2,short.s1p", "tee.s3p"])
+def test_constant_file_gives_pole_free_model(name: str, tmp_path: Path) -> None:
+    data = read_spectrum(SKRF_DATA / name)
+    # an ideal short repeats its value: it is data, not export padding
+    assert find_artifacts(data).n_genuine == data.n_freq
+    res = run_fit([data], passive=True)
+    assert res.data.n_freq == data.n_freq
+    assert res.model.n_poles == 0
+    assert res.unconstrained_rel_rms_error < 1e-9
+    assert res.passivity is not None and res.passivity.passive
+    # tee.s3p is lossless to 6 digits (sigma = 1 + 1e-12): enforcement moves D by < 1e-4
+    assert res.rel_rms_error < 1e-4
+    obj = model_to_json(res.model, res.fit, (1.0, 2.0), True)
+    (tmp_path / "m.json").write_text(json.dumps(obj, allow_nan=False))
+    back = read_model_json(tmp_path / "m.json")
+    assert back.n_poles == 0
+    np.testing.assert_allclose(back(data.freq_hz), res.model(data.freq_hz), atol=1e-12)
+
+
+@pytest.mark.ngspice
+def test_pole_free_model_in_ngspice() -> None:
+    from vfmodel.circuit.ngspice import run_ac
+    from vfmodel.circuit.synthesis import model_to_spice
+
+    z = np.array([[3.0, 1.0], [1.0, 2.0]])  # a resistive T network
+    data = FrequencyData(np.geomspace(1e3, 1e6, 20), np.repeat(z[None], 20, axis=0), kind="Z")
+    model, report = vector_fit(data)
+    assert model.n_poles == 0 and report.rel_rms_error < 1e-12
+    net = "\n".join(["pole-free", model_to_spice(model, "const").strip(),
+                     "X1 p1 p2 0 const", "I1 0 p1 DC 0 AC 1", "R2 p2 0 1e12"]) + "\n"
+    res = run_ac(net, ["v(p1)", "v(p2)"], f_start_hz=1e3, f_stop_hz=1e6, points_per_decade=2)
+    # unit current into port 1, port 2 open: v1 = Z11, v2 = Z21
+    np.testing.assert_allclose(res.values[:, 0], 3.0, rtol=1e-6)
+    np.testing.assert_allclose(res.values[:, 1], 1.0, rtol=1e-6)
+
+
+# ---------------------------------------------------------------------- strict JSON
+def test_band_to_infinity_written_as_null(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = SKRF_DATA / "ring slot measured.s1p"
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", FitWarning)  # the CLI prints it on stderr
+        status = cli_main(["fit", str(src), "--out", str(tmp_path), "--no-plot", "--quiet"])
+    assert status == 0
+    assert "far above the estimated noise floor" in capsys.readouterr().err
+    text = (tmp_path / "model.json").read_text()
+    assert "Infinity" not in text and "NaN" not in text
+    obj = json.loads(text)
+    bands = obj["passivity"]["bands_hz"]
+    assert obj["passive"] is False and bands and bands[-1][1] is None  # band to infinity
+    assert obj["point_rel_rms_error"] > 0 and obj["passivity"]["data_floor"] == 0.0
+
+
+# ---------------------------------------------------------------------- certificates
+@pytest.mark.parametrize("name", ["wr2p2,line1.s2p", "wr2p2,delayshort.s1p", "ro,1.s1p"])
+def test_certificate_agrees_with_dense_sampling(name: str) -> None:
+    data = read_spectrum(SKRF_DATA / name)
+    model, _ = vector_fit(data)
+    f = data.freq_hz
+    dense = _dense_min_margin(model, f[0], f[-1])
+    for method in ("auto", "sampling"):
+        check = check_passivity(model, method=method)  # type: ignore[arg-type]
+        # wr2p2,line1: sigma_max 1.000335 from 0 Hz up was certified passive before
+        assert check.passive == (dense >= -1e-12), (method, dense, check)
+    passive, check = enforce_passivity(model, data)
+    assert check.passive
+    assert _dense_min_margin(passive, f[0], f[-1]) >= -1e-12
+
+
+# ---------------------------------------------------------------------- one data argument
+def test_one_data_argument_everywhere() -> None:
+    path = SKRF_DATA / "ro,3.s1p"
+    net = skrf.Network(str(path))
+    fd = read_spectrum(path)
+    ref, _ = vector_fit(fd)
+    for arg in (net, str(path), path):
+        model, _ = vector_fit(arg)
+        np.testing.assert_allclose(model(fd.freq_hz), ref(fd.freq_hz), rtol=1e-6, atol=1e-9)
+        _out, check = enforce_passivity(ref, arg)
+        assert check.passive
+    back = ref.to_network(fd.freq_hz)
+    assert isinstance(back, skrf.Network)
+    np.testing.assert_allclose(back.s, ref(fd.freq_hz), rtol=1e-12)
+
+
+# ---------------------------------------------------------------------- active data
+def test_active_transistor_recognised() -> None:
+    path = VFBENCH / "BFU520_05V0_010mA_NF_SP.s2p"
+    data = read_spectrum(path)
+    dp = data_passivity(data)
+    assert dp is not None and dp.active
+    # |S21| of the amplifier is about 10-20 at 0.4-2 GHz
+    assert dp.worst_violation > 5
+    model, _ = vector_fit(data)
+    with pytest.raises(InputError, match="active"):
+        enforce_passivity(model, data)
+    with pytest.raises(InputError, match="active"):
+        run_fit([data], passive=True)
+    res = run_fit([data])  # fitting an active device is fine
+    assert res.rel_rms_error < 0.05 and res.passivity is not None
+    assert not res.passivity.passive
+
+
+def test_data_floor_of_a_projection() -> None:
+    # S = 1.01 at every point of a 1-port: the nearest passive S is 1, distance 0.01/1.01
+    f = np.linspace(1e6, 1e7, 10)
+    dp = data_passivity(FrequencyData(f, np.full(10, 1.01 + 0j), kind="S"))
+    assert dp is not None
+    assert dp.floor == pytest.approx(0.01 / 1.01, rel=1e-12)
+    assert dp.worst_violation == pytest.approx(0.01, rel=1e-9) and not dp.active
+    # Z = [[1, 0], [0, -0.5]] (Hermitian part eigenvalue -0.5): distance 0.5 / sqrt(1.25)
+    z = np.repeat(np.array([[1.0, 0.0], [0.0, -0.5]])[None], 10, axis=0)
+    dz = data_passivity(FrequencyData(f, z, kind="Z"))
+    assert dz is not None and dz.floor == pytest.approx(0.5 / np.sqrt(1.25), rel=1e-12)
+    assert dz.active
+
+
+# ---------------------------------------------------------------------- per-point accuracy
+def _impedance(f: np.ndarray) -> np.ndarray:
+    """Analytic impedance spanning decades: 1 nF to frame in parallel with a series
+    R-L-C branch (resonance near 160 kHz) and a second, damped one near 2 MHz."""
+    s = 2j * np.pi * f
+    y = s * 1e-9 + 1 / (2.0 + s * 1e-3 + 1 / (s * 1e-9)) + 1 / (20.0 + s * 1e-5 + 1 / (s * 6e-10))
+    return np.asarray(1 / y)
+
+
+def test_relative_weighting_reaches_below_the_noise() -> None:
+    f = np.geomspace(1e3, 1e7, 401)
+    truth = _impedance(f)
+    rng = np.random.default_rng(1)
+    noisy = truth * (1 + 0.005 * (rng.standard_normal(f.size)
+                                  + 1j * rng.standard_normal(f.size)) / np.sqrt(2))
+    data = FrequencyData(f, noisy, kind="Z")
+    model, report = vector_fit(data)
+    assert report.weighting == "relative"
+    e = np.abs(model(f)[:, 0, 0] - truth) / np.abs(truth)
+    # 0.5 % noise per point: the model is closer to the truth than the noise
+    assert np.sqrt(np.mean(e**2)) < 0.003
+    assert report.point_rel_rms_error == pytest.approx(0.005, rel=0.25)
+    _, uniform = vector_fit(data, weighting="uniform")
+    assert uniform.point_rel_max_error > report.point_rel_max_error
