@@ -179,3 +179,12 @@ def test_relative_weighting_reaches_below_the_noise() -> None:
     assert report.point_rel_rms_error == pytest.approx(0.005, rel=0.25)
     _, uniform = vector_fit(data, weighting="uniform")
     assert uniform.point_rel_max_error > report.point_rel_max_error
+
+
+def test_info_single_file(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli_main(["info", str(VFBENCH / "BFU520_05V0_010mA_NF_SP.s2p")]) == 0
+    out = capsys.readouterr().out
+    assert "S 2x2, z0 50 ohm, 37 points" in out and "ACTIVE data" in out
+    assert cli_main(["info", str(SKRF_DATA / "ro,1.s1p"), "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert obj["n_points"] == 201 and obj["active"] is False and obj["spacing"] == "linear"

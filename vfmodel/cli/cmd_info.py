@@ -1,9 +1,10 @@
-"""``vfmodel info DATASET``: what a dataset holds."""
+"""``vfmodel info DATASET|FILE``: what a dataset or a single spectrum file holds."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -11,10 +12,15 @@ from vfmodel.cli._common import finite_json
 
 
 @click.command()
-@click.argument("dataset", type=click.Path(path_type=Path))
+@click.argument("dataset", metavar="DATASET|FILE", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 def info(dataset: Path, as_json: bool) -> None:
-    """Topologies, frequency ranges, recordings, sample rates, durations and SNR estimates."""
+    """Topologies, frequency ranges, recordings, sample rates, durations and SNR estimates
+    of a dataset; or, for a single Touchstone/CSV file, its kind, ports, points, range,
+    noise estimate and passivity violation floor."""
+    if dataset.is_file():
+        _info_file(dataset, as_json)
+        return
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.pipeline.summary import dataset_summary
 
@@ -41,3 +47,27 @@ def info(dataset: Path, as_json: bool) -> None:
             f"  {r['duration_s'] * 1e3:.4g} ms  raw peak u_B {r['peak_u_B_v']:.3g} V"
             f"  SNR u_B ~{r['snr_u_B_db']:.3g} dB, terminals ~{r['snr_terminals_db']:.3g} dB"
         )
+
+
+def _info_file(path: Path, as_json: bool) -> None:
+    """``info FILE``: one spectrum (Touchstone or CSV)."""
+    from vfmodel.core.io_spectrum import read_spectrum
+    from vfmodel.pipeline.fit_job import spectrum_summary
+
+    s: dict[str, Any] = spectrum_summary(read_spectrum(path))
+    if as_json:
+        click.echo(json.dumps(finite_json(s), indent=2, allow_nan=False))
+        return
+    n_out, n_in = s["ports"]
+    z0 = f", z0 {s['z0_ohm']:g} ohm" if s["z0_ohm"] is not None else ""
+    click.echo(f"{path}: {s['kind']} {n_out}x{n_in}{z0}, {s['n_points']} points "
+               f"{s['f_min_hz']:.6g} - {s['f_max_hz']:.6g} Hz ({s['spacing']})")
+    click.echo(f"  ||H(f)|| {s['norm_min']:.4g} - {s['norm_max']:.4g}"
+               + (f", noise ~{100 * s['noise_rel']:.2g} % per point"
+                  if s["noise_rel"] is not None else ""))
+    if s["artifacts"]:
+        click.echo(f"  artifacts: {s['artifacts']}")
+    if s["passivity_floor"] is not None:
+        click.echo(f"  passivity violation floor {s['passivity_floor']:.3g} (largest "
+                   f"violation {s['worst_violation']:.3g})"
+                   + ("; ACTIVE data" if s["active"] else ""))

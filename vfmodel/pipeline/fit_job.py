@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -162,3 +162,46 @@ def run_fit(
     prms, pmax = point_errors(model, data)
     report = replace(report, point_rel_rms_error=prms, point_rel_max_error=pmax)
     return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
+
+
+def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
+    """What ``vfmodel info FILE`` says about one spectrum: kind, ports, reference
+    impedance, points, frequency range and spacing, size range of ||H(f)||_F, the noise
+    estimate (relative, as the automatic order sees it), export artifacts and, for square
+    Z/Y/S data, the passivity violation floor (active or not)."""
+    from vfmodel.fitting import _order, _vf_core
+
+    f = data.freq_hz
+    pos = f[f > 0]
+    norm = np.linalg.norm(data.values.reshape(data.n_freq, -1), axis=1)
+    spacing = "single point"
+    if pos.size >= 3:
+        lin = np.ptp(np.diff(pos)) <= 1e-6 * pos[-1]
+        spacing = "linear" if lin else ("logarithmic" if np.ptp(np.diff(np.log(pos)))
+                                         <= 1e-6 else "irregular")
+    noise = None
+    if data.n_freq >= 16 and float(np.max(norm)) > 0:
+        w = 1.0 / np.maximum(norm, 1e-12 * float(np.max(norm)))
+        prob = _vf_core.Problem(1j * f / max(f[-1], 1e-300) + 0j,
+                                data.values.reshape(data.n_freq, -1), w[:, None],
+                                True, False, None)
+        noise = _order.estimate_noise(prob)
+    art = find_artifacts(data) if data.n_freq >= 3 else None
+    dp = data_passivity(data)
+    return {
+        "source": data.source,
+        "kind": data.kind,
+        "ports": [data.n_out, data.n_in],
+        "z0_ohm": data.z0,
+        "n_points": data.n_freq,
+        "f_min_hz": float(f[0]),
+        "f_max_hz": float(f[-1]),
+        "spacing": spacing,
+        "norm_min": float(np.min(norm)),
+        "norm_max": float(np.max(norm)),
+        "noise_rel": noise,
+        "artifacts": None if art is None or not art.found else art.describe(),
+        "passivity_floor": None if dp is None else dp.floor,
+        "worst_violation": None if dp is None else dp.worst_violation,
+        "active": None if dp is None else dp.active,
+    }
