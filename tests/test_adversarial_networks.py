@@ -157,6 +157,8 @@ NETLIST_CASES: dict[str, str | bytes] = {
     "n_k_too_large": _net(".end", "L1 U a 1u\nL2 a 0 1u\nK1 L1 L2 1.5\n.end"),
     "n_ac_phase": _net(".end", "V1 U 0 AC 1 90\n.end"),
     "n_model_json": '{"kind": "Z", "poles": []}\n',
+    "n_2000_nodes": _net(".end", "".join(f"R{k}x n{k} n{k + 1} 1\nC{k}x n{k + 1} 0 1n\n"
+                                        for k in range(2000)) + "R0y n0 0 1\n.end"),
 }
 
 

@@ -14,6 +14,8 @@ if TYPE_CHECKING:
     from vfmodel.circuit.netlist import Circuit
     from vfmodel.pipeline.predict import Prediction
 
+MAX_MODEL_NODES = 500
+"""Largest model netlist predict solves (every frequency of the record is one MNA solve)."""
 PREDICT_OUTPUTS = ("prediction.npz", "prediction.json", "prediction.png")
 """Outputs of ``predict`` in DIR (an earlier run's are replaced, never mixed)."""
 
@@ -109,6 +111,10 @@ def read_model_netlist(model: Path) -> Circuit:
             msg = f"{model}: {msg}"
         raise InputError(msg) from None
     check_model_nodes(circ, str(model))
+    if len(circ.nodes) > MAX_MODEL_NODES:
+        raise InputError("model netlist too large for predict", source=str(model),
+                         found=f"{len(circ.nodes)} nodes",
+                         expected=f"at most {MAX_MODEL_NODES} (a grey-box network has ~50)")
     return circ
 
 
