@@ -188,3 +188,58 @@ def test_info_single_file(capsys: pytest.CaptureFixture[str]) -> None:
     assert cli_main(["info", str(SKRF_DATA / "ro,1.s1p"), "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["n_points"] == 201 and obj["active"] is False and obj["spacing"] == "linear"
+
+
+# ---------------------------------------------------------------------- delay
+def _delayed_line(f: np.ndarray, tau: float) -> np.ndarray:
+    """Causal 2-port: transmission 0.9 exp(-s tau) / (1 + s/w1), small reflections."""
+    s = 2j * np.pi * f
+    s21 = 0.9 * np.exp(-s * tau) / (1 + s / (2 * np.pi * 3e9))
+    s11 = 0.05 / (1 + s / (2 * np.pi * 5e9))
+    out = np.empty((f.size, 2, 2), complex)
+    out[:, 0, 0] = out[:, 1, 1] = s11 * np.exp(-s * tau)
+    out[:, 0, 1] = out[:, 1, 0] = s21
+    return out
+
+
+def test_delay_extraction_cuts_the_order() -> None:
+    f = np.linspace(1e7, 5e9, 600)
+    tau = 5e-9  # 25 phase turns over the band
+    data = FrequencyData(f, _delayed_line(f, tau), kind="S")
+    model, report = vector_fit(data, delay="auto")
+    assert model.delay == pytest.approx(tau, rel=0.05)
+    assert report.rel_rms_error < 1e-3 and model.n_poles <= 12
+    # without the delay: 167 poles on this machine; at least 5x more in any case
+    plain, _ = vector_fit(data, delay="none")
+    assert plain.n_poles >= 5 * model.n_poles
+    check = check_passivity(model)
+    if not check.passive:
+        model, check = enforce_passivity(model, data)
+    assert check.passive and model.delay == pytest.approx(tau, rel=0.05)
+
+
+@pytest.mark.ngspice
+def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
+    from vfmodel.circuit.ngspice import run_ac
+
+    f = np.linspace(1e7, 5e9, 600)
+    src = tmp_path / "line.s2p"
+    FrequencyData(f, _delayed_line(f, 5e-9), kind="S").to_network().write_touchstone(
+        str(src.with_suffix("")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)
+        assert cli_main(["fit", str(src), "--out", str(tmp_path / "o"), "--no-plot",
+                         "--quiet", "--spice", str(tmp_path / "m.cir")]) == 0
+    obj = json.loads((tmp_path / "o" / "model.json").read_text())
+    assert obj["delay_s"] == pytest.approx(5e-9, rel=0.05)
+    model = read_model_json(tmp_path / "o" / "model.json")
+    # S-parameter harness: 2 V source behind z0 at port 1, z0 load at port 2:
+    # S11 = V(p1) - 1, S21 = V(p2)
+    net = "\n".join(["delay harness", (tmp_path / "m.cir").read_text().strip(),
+                     "X1 p1 p2 0 vfmodel", "V1 s 0 DC 0 AC 2", "R1 s p1 50",
+                     "R2 p2 0 50"]) + "\n"
+    res = run_ac(net, ["v(p1)", "v(p2)"], f_start_hz=1e7, f_stop_hz=5e9,
+                 points_per_decade=40)
+    ref = model(res.freq_hz)
+    np.testing.assert_allclose(res.values[:, 1], ref[:, 1, 0], atol=1e-4)
+    np.testing.assert_allclose(res.values[:, 0] - 1, ref[:, 0, 0], atol=1e-4)

@@ -179,3 +179,20 @@ def _card(el: Element, emap: Mapping[str, str], nmap: Mapping[str, str],
     else:  # cccs, ccvs
         card = f"{name} {nodes} {emap[el.refs[0]]} {_num(el.value)}"
     return [head, *_wrap(card)]
+
+
+def delayed_subckt(rational: str, rational_name: str, name: str, n_ports: int, z0: float,
+                   delay_s: float) -> str:
+    """``.subckt NAME p1 ... pN ref`` realising an S model ``exp(-s delay) S_r(s)``:
+    the subcircuit ``rational`` (named ``rational_name``, pins p1..pN ref, realising S_r at
+    reference impedance ``z0``) behind a matched lossless line (``T``, impedance z0,
+    delay/2) at every port. A matched line of delay t at each port multiplies every entry
+    of S by exp(-s t) twice (in and out), so S = exp(-s delay) S_r exactly."""
+    pins = " ".join(f"p{k + 1}" for k in range(n_ports))
+    inner = " ".join(f"d{k + 1}" for k in range(n_ports))
+    lines = [rational.strip(), f".subckt {name} {pins} ref",
+             f"* common delay {delay_s:.12g} s: matched lossless lines of half of it"]
+    for k in range(n_ports):
+        lines.append(f"T{k + 1} p{k + 1} ref d{k + 1} ref Z0={z0:.12g} TD={delay_s / 2:.12g}")
+    lines += [f"X1 {inner} ref {rational_name}", ".ends"]
+    return "\n".join(lines) + "\n"

@@ -16,6 +16,19 @@ FIT_OUTPUTS = ("model.json", "fit.png")
 """Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""
 
 
+def _delay(value: str) -> float | str:
+    if value in ("auto", "none"):
+        return value
+    try:
+        tau = float(value)
+    except ValueError:
+        tau = -1.0
+    if not (tau >= 0 and tau < float("inf")):
+        raise click.BadParameter(f"{value!r}: expected auto, none or a delay in seconds",
+                                 param_hint="--delay")
+    return tau
+
+
 def _order(value: str) -> int | str:
     if value == "auto":
         return "auto"
@@ -47,6 +60,10 @@ def _order(value: str) -> int | str:
 @click.option("--target-error", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Automatic order: stop at this weighted relative RMS error instead of "
               "the estimated noise floor.")
+@click.option("--delay", default="auto", show_default=True,
+              help="Common delay taken out before the fit and kept in the model (S and "
+              "H data): 'auto' (when the phase turns more than 5 times over the band), "
+              "'none' or seconds. Exported to SPICE as matched lossless lines (T).")
 @click.option("--dc", type=click.Choice(["enforce", "fit"]), default="enforce",
               show_default=True, help="A 0 Hz sample: matched exactly or fitted like "
               "the others.")
@@ -66,7 +83,8 @@ def _order(value: str) -> int | str:
 @out_option
 @quiet_option
 def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
-        max_order: int | None, target_error: float | None, dc: str, passive: bool,
+        max_order: int | None, target_error: float | None, delay: str, dc: str,
+        passive: bool,
         enforce_iterations: int, enforce_margin: float, spice: Path | None,
         subckt_name: str, no_plot: bool, out_dir: Path, quiet: bool) -> None:
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
@@ -84,7 +102,7 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
         raise click.BadParameter(f"{subckt_name!r}: expected a SPICE name (letters, digits, "
                                  "_ . -, starting with a letter or _)",
                                  param_hint="--subckt-name")
-    opts = {"max_order": max_order, "target_error": target_error, "dc": dc,
+    opts = {"delay": _delay(delay), "max_order": max_order, "target_error": target_error, "dc": dc,
             "enforce_iterations": enforce_iterations, "enforce_margin": enforce_margin}
     if spice is not None and spice.suffix.lower() not in (".cir", ".sp", ".spice", ".lib",
                                                           ".sub", ".subckt", ".net"):
@@ -122,7 +140,16 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
     if spice_tmp is not None:
         from vfmodel.circuit.synthesis import model_to_spice
 
-        spice_tmp.write_text(model_to_spice(res.model, name=subckt_name), encoding="utf-8")
+        if res.model.delay:
+            from vfmodel.circuit.spice_export import delayed_subckt
+
+            inner = f"{subckt_name}_rational"
+            text = delayed_subckt(model_to_spice(res.model.without_delay(), name=inner),
+                                  inner, subckt_name, res.model.n_in,
+                                  float(res.model.z0 or 50.0), res.model.delay)
+        else:
+            text = model_to_spice(res.model, name=subckt_name)
+        spice_tmp.write_text(text, encoding="utf-8")
     write_json(stage / "model.json", obj)
     if not no_plot:
         from vfmodel.report.fit_figures import plot_fit

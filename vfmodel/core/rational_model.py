@@ -81,7 +81,8 @@ def _canonical_order(
 class RationalModel:
     """Pole-residue rational model (CONTRACT section 4).
 
-    ``H(s) = sum_k residues[k] / (s - poles[k]) + d + s * e`` with ``s = j 2 pi f``.
+    ``H(s) = (sum_k residues[k] / (s - poles[k]) + d + s * e) exp(-s delay)`` with
+    ``s = j 2 pi f``.
     Poles are rad/s; complex poles come in explicitly listed conjugate pairs with conjugate
     residues. The constructor orders poles canonically: real poles first, then each pole with
     positive imaginary part followed by its conjugate.
@@ -93,6 +94,10 @@ class RationalModel:
     d, e : (n_out, n_in) real, default zero
     kind : {"Z", "Y", "S", "H"}
     z0 : float, optional (S models)
+    delay : float, default 0
+        Common delay in seconds (S and H models only; 0 = none). The rational part is
+        what :meth:`to_state_space` realises; the delay multiplies it. An S model's delay
+        is realised in SPICE by matched lossless lines of delay/2 at every port.
     """
 
     poles: NDArray[np.complex128]
@@ -101,9 +106,21 @@ class RationalModel:
     e: NDArray[np.float64] | None = None
     kind: Kind = "Z"
     z0: float | None = None
+    delay: float = 0.0
 
     def __post_init__(self) -> None:
         src = "RationalModel"
+        tau = float(self.delay)
+        if not (np.isfinite(tau) and tau >= 0):
+            raise InputError("delay must be finite and >= 0", source=src, found=repr(self.delay))
+        if tau > 0 and self.kind in ("Z", "Y"):
+            raise InputError(
+                "a delay is supported for S and H models only",
+                source=src,
+                found=f"kind {self.kind!r} with delay {tau:g} s",
+                expected="delay 0 for Z/Y (a delayed immittance is not positive real)",
+            )
+        object.__setattr__(self, "delay", tau)
         if self.kind not in KINDS:
             raise InputError("unknown kind", source=src, found=repr(self.kind))
         p = np.atleast_1d(np.asarray(self.poles, dtype=complex))
@@ -187,7 +204,14 @@ class RationalModel:
         h = (basis @ self.residues.reshape(self.n_poles, self.n_out * self.n_in)).reshape(
             s.size, self.n_out, self.n_in
         )
-        return h + self.dd[None] + s[:, None, None] * self.ee[None]
+        h = h + self.dd[None] + s[:, None, None] * self.ee[None]
+        if self.delay:
+            h = h * np.exp(-s * self.delay)[:, None, None]
+        return h
+
+    def without_delay(self) -> RationalModel:
+        """The rational part alone (delay 0)."""
+        return RationalModel(self.poles, self.residues, self.d, self.e, self.kind, self.z0)
 
     def __call__(self, freq_hz: ArrayLike) -> NDArray[np.complex128]:
         """H(j 2 pi f): shape (n_freq, n_out, n_in)."""
@@ -212,7 +236,8 @@ class RationalModel:
 
     # ------------------------------------------------------------------ realisation
     def to_state_space(self) -> StateSpace:
-        """Real realisation (A, B, C, D, E), n_in states per real pole, 2 n_in per pair.
+        """Real realisation (A, B, C, D, E) of the rational part (without ``delay``),
+        n_in states per real pole, 2 n_in per pair.
 
         A complex pair p = a + jb with residue R = R' + jR'' is realised with
         A = [[a I, b I], [-b I, a I]], B = [[2 I], [0]], C = [R', R''], which gives
@@ -262,6 +287,7 @@ class RationalModel:
             ],
             "d": self.dd.tolist(),
             "e": self.ee.tolist(),
+            "delay_s": self.delay,
         }
 
     @classmethod
@@ -279,6 +305,7 @@ class RationalModel:
                 e=np.array(obj["e"], dtype=float).reshape(n_out, n_in),
                 kind=obj["kind"],
                 z0=obj.get("z0"),
+                delay=float(obj.get("delay_s") or 0.0),
             )
         except (KeyError, TypeError, ValueError) as err:
             if isinstance(err, InputError):

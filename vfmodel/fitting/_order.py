@@ -191,6 +191,7 @@ def auto_order(
     stable: bool,
     target: float | None = None,
     margin: float = NOISE_MARGIN,
+    min_order: int = 0,
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
@@ -239,7 +240,7 @@ def auto_order(
         stall = n - n_gain if err > (1.0 - _MIN_GAIN) * best_err else 0
         if err <= (1.0 - _MIN_GAIN) * best_err:
             n_gain = n
-        if stall >= max(4, n_gain // 4):
+        if stall >= max(4, n_gain // 4) and n >= min_order:
             why = "plateau"
             break
         best_err = min(best_err, err)

@@ -64,6 +64,12 @@ class Problem:
         in the band like an integrator whose out-of-band value (at 0 Hz) is huge; far
         above, like a second D; either makes a scattering model grossly non-passive out of
         band, which enforcement can only repair by distorting the fit.
+    ridge : float
+        Tikhonov weight of the residue solve, relative to the column-normalised system
+        (0: none). Over a narrow band D, far poles and pairs of large cancelling residues
+        are nearly collinear; a tiny ridge picks the small-coefficient solution, whose
+        out-of-band response stays of the size of the data (Hoerl & Kennard 1970,
+        doi:10.1080/00401706.1970.10488634).
     """
 
     s: ComplexArray
@@ -73,6 +79,7 @@ class Problem:
     fit_e: bool
     dc_index: int | None
     pole_bounds: tuple[float, float] | None = None
+    ridge: float = 0.0
 
     @property
     def n_freq(self) -> int:
@@ -251,15 +258,20 @@ def weighted_rel_rms(prob: Problem, model: ComplexArray) -> float:
 
 
 # ---------------------------------------------------------------------- solves
-def _scaled_lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
+def _scaled_lstsq(a: FloatArray, b: FloatArray, ridge: float = 0.0) -> FloatArray:
     """Least squares with unit-norm column scaling (columns of zeros give zero).
 
     Householder QR and a triangular solve; the SVD solver (minimum-norm solution) only
-    when the scaled matrix is numerically rank deficient.
+    when the scaled matrix is numerically rank deficient. ``ridge`` > 0 appends the rows
+    ``ridge * ||b||_F / sqrt(n_cols) * I`` (Tikhonov) to the scaled system.
     """
     norms = np.linalg.norm(a, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
     an = a / norms
+    if ridge > 0 and an.shape[1]:
+        mu = ridge * float(np.linalg.norm(b)) / np.sqrt(an.shape[1])
+        an = np.vstack([an, mu * np.eye(an.shape[1])])
+        b = np.concatenate([b, np.zeros((an.shape[1], *b.shape[1:]))], axis=0)
     if an.shape[0] >= an.shape[1]:
         q, r = np.linalg.qr(an)
         diag = np.abs(np.diag(r))
@@ -333,7 +345,7 @@ def solve_residues(
     n = n_poles(reps)
     sys_ = _residue_system(prob, reps, pf)
     if sys_.a.ndim == 2:
-        x_keep = _scaled_lstsq(sys_.a, sys_.b)  # (Nk, M)
+        x_keep = _scaled_lstsq(sys_.a, sys_.b, prob.ridge)  # (Nk, M)
     else:
         x_keep = _batched_scaled_lstsq(sys_.a, sys_.b.T).T
     x = np.zeros((n + prob.n_extra, prob.n_resp))

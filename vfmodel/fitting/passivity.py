@@ -492,6 +492,18 @@ def enforce_passivity(
                 expected=f"data within {100 * ACTIVE_FLOOR:g} % of passive, or "
                 "allow_active=True",
             )
+    if model.delay:
+        # |exp(-j w delay)| = 1: enforce on the rational part against the advanced data
+        if data is not None:
+            data = data.with_values(
+                data.values * np.exp(2j * np.pi * data.freq_hz * model.delay)[:, None, None]
+            )
+        rational, report = enforce(
+            model.without_delay(), data, weighting=weighting, perturb_d=perturb_d,
+            max_iter=max_iter, margin=margin,
+        )
+        return RationalModel(rational.poles, rational.residues, rational.d, rational.e,
+                             rational.kind, rational.z0, delay=model.delay), report
     return enforce(
         model,
         data,

@@ -218,6 +218,9 @@ _CONSTANT = 1e-9  # relative spread over frequency below which the data is a con
 _POLE_SPAN = (10.0, 100.0)  # S models: real poles within [f_lo / 10, 100 f_hi]
 
 
+_RIDGE = 1e-7  # S fits: Tikhonov weight of the residue solve (see _vf_core.Problem)
+
+
 def _pole_bounds(fd: FrequencyData, omega_scale: float) -> tuple[float, float] | None:
     """Real-pole bounds of S fits (see :class:`_vf_core.Problem`); None for immittances
     and transfer functions, whose poles near 0 Hz are physical (a capacitor)."""
@@ -252,6 +255,7 @@ def vector_fit(
     exclude: NDArray[np.intp] | tuple[int, ...] | None = None,
     dc: DcMode = "enforce",
     target_error: float | None = None,
+    delay: float | Literal["auto", "none"] = "none",
 ) -> tuple[RationalModel, FitReport]:
     """Fit a rational model with common poles to every entry of a frequency response.
 
@@ -310,6 +314,12 @@ def vector_fit(
     target_error : float, optional
         Automatic order: stop at this weighted relative RMS error instead of the
         estimated noise floor.
+    delay : float, "auto" or "none"
+        Common delay (seconds) taken out before the fit and kept in the model
+        (``model.delay``; S and H data only): a long interconnect's phase turns many times
+        over the band, which costs about two poles per turn. "auto": the delay of the
+        largest entry's phase slope when its phase turns more than 5 times over the band
+        (least-squares slope), else none.
 
     Returns
     -------
@@ -347,6 +357,10 @@ def vector_fit(
         w = _exclude(w, exclude, fd.n_freq)
     if constant:
         return _constant_fit(fd, wname)
+    tau = _delay(fd, delay)
+    if tau > 0:  # fit the response advanced by the delay; the model carries it
+        data_fd = fd
+        fd = fd.with_values(fd.values * np.exp(2j * np.pi * fd.freq_hz * tau)[:, None, None])
     has_dc = bool(fd.freq_hz[0] == 0.0)
     n_extra = int(bool(fit_d)) + int(bool(fit_e))
     limit = _max_order(fd.n_freq, has_dc, n_extra)
@@ -363,6 +377,7 @@ def vector_fit(
         fit_e=bool(fit_e),
         dc_index=0 if has_dc and dc == "enforce" else None,
         pole_bounds=_pole_bounds(fd, omega_scale),
+        ridge=_RIDGE if fd.kind == "S" else 0.0,
     )
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
@@ -388,6 +403,9 @@ def vector_fit(
             stable=enforce_stability,
             target=target_error,
             margin=_order.RELATIVE_MARGIN if wname == "relative" else _order.NOISE_MARGIN,
+            # a response whose phase turns many times needs about two poles per turn:
+            # no plateau is declared below that order
+            min_order=min(cap, int(2 * _phase_turns(fd)) + 4),
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise = auto.reason, auto.noise_floor
@@ -417,6 +435,9 @@ def vector_fit(
         coef, history, n_it, converged = res.coef, res.history, res.n_iterations, res.converged
         reason, noise = f"order {n} given", None
     model = _to_model(coef, fd, omega_scale, fit_d=bool(fit_d), fit_e=bool(fit_e))
+    if tau > 0:
+        fd, model = data_fd, RationalModel(model.poles, model.residues, model.d, model.e,
+                                           model.kind, model.z0, delay=tau)
     report = _make_report(
         model, fd, prob, coef, n_it, converged, reason, noise, history, wname
     )
@@ -523,17 +544,45 @@ def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitRepo
     )
 
 
+def _delay(fd: FrequencyData, delay: Any) -> float:
+    """The common delay of ``vector_fit(delay=...)`` in seconds (0: none)."""
+    if isinstance(delay, str):
+        if delay not in ("auto", "none"):
+            raise InputError("delay must be 'auto', 'none' or seconds", found=repr(delay))
+        if delay == "none" or fd.kind in ("Z", "Y") or _phase_turns(fd) <= _DELAY_TURNS:
+            return 0.0
+        h = fd.values.reshape(fd.n_freq, -1)
+        j = int(np.argmax(np.sum(np.abs(h) ** 2, axis=0)))
+        ph = np.unwrap(np.angle(h[:, j]))
+        # least-squares group delay of the largest entry (a transmission)
+        return max(-float(np.polyfit(fd.omega, ph, 1)[0]), 0.0)
+    tau = float(delay)
+    if not (np.isfinite(tau) and tau >= 0):
+        raise InputError("delay must be finite and >= 0 seconds", found=repr(delay))
+    if tau > 0 and fd.kind in ("Z", "Y"):
+        raise InputError(
+            "a delay is supported for S and H data only",
+            source=fd.source or _SRC,
+            found=f"{fd.kind} data",
+            expected="delay='none' or --kind S",
+        )
+    return tau
+
+
 _FAR = 3.0  # an automatic fit this many times above the noise floor gets a note
 _DELAY_TURNS = 5.0  # phase turns over the band that point at a delay
 
 
 def _phase_turns(fd: FrequencyData) -> float:
-    """Phase turns over the band of the largest entry (after removing its linear part's
-    sign): a long delay shows as many turns."""
+    """Largest number of phase turns over the band among the entries carrying at least
+    1 % of the energy: a long delay shows as many turns."""
     h = fd.values.reshape(fd.n_freq, -1)
-    j = int(np.argmax(np.sum(np.abs(h) ** 2, axis=0)))
-    ph = np.unwrap(np.angle(h[:, j]))
-    return float(abs(ph[-1] - ph[0]) / (2 * np.pi))
+    energy = np.sum(np.abs(h) ** 2, axis=0)
+    turns = 0.0
+    for j in np.flatnonzero(energy >= 1e-2 * energy.max()):
+        ph = np.unwrap(np.angle(h[:, j]))
+        turns = max(turns, float(abs(ph[-1] - ph[0]) / (2 * np.pi)))
+    return turns
 
 
 def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitReport:

@@ -92,6 +92,7 @@ def run_fit(
     progress: Progress = no_progress,
     max_order: int | None = None,
     target_error: float | None = None,
+    delay: float | Literal["auto", "none"] = "none",
     dc: DcMode = "enforce",
     enforce_iterations: int = 30,
     enforce_margin: float = 1e-6,
@@ -130,7 +131,8 @@ def run_fit(
         )
     progress("vector fit", 0, 2 if passive else 1)
     model, report = vector_fit(data, order=order, weighting=weighting, exclude=spikes or None,
-                               max_order=max_order, target_error=target_error, dc=dc)
+                               max_order=max_order, target_error=target_error, dc=dc,
+                               delay=delay)
     _, unconstrained_rel, _ = fit_errors(model, data)
     progress("vector fit", 1, 2 if passive else 1)
     pas: PassivityReport | None = None
