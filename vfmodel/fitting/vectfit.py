@@ -317,9 +317,12 @@ def vector_fit(
     delay : float, "auto" or "none"
         Common delay (seconds) taken out before the fit and kept in the model
         (``model.delay``; S and H data only): a long interconnect's phase turns many times
-        over the band, which costs about two poles per turn. "auto": the delay of the
-        largest entry's phase slope when its phase turns more than 5 times over the band
-        (least-squares slope), else none.
+        over the band, which costs about two poles per turn. "auto": when some entry's
+        phase turns more than 5 times over the band, the data are fitted with the group
+        delay of the largest entry (least-squares phase slope) and without a delay, and the
+        delay is kept when its error is within 1.25 times the larger of the other's, its
+        noise floor estimate and 1e-6 (reflections advanced
+        by a transmission's delay can be harder to fit than the plain data).
 
     Returns
     -------
@@ -358,6 +361,25 @@ def vector_fit(
     if constant:
         return _constant_fit(fd, wname)
     tau = _delay(fd, delay)
+    if tau > 0 and delay == "auto":
+        # a common delay suits transmission-dominated data; reflections advanced by it are
+        # harder to fit: fit both ways and keep the delay only where it pays
+        kw: dict[str, Any] = {
+              "kind": kind, "weighting": weighting, "spacing": spacing, "fit_d": fit_d,
+              "fit_e": fit_e, "initial_poles": initial_poles,
+              "max_iterations": max_iterations, "tol": tol, "max_order": max_order,
+              "enforce_stability": enforce_stability, "exclude": exclude, "dc": dc,
+              "target_error": target_error}
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            with_delay = vector_fit(fd, order, delay=tau, **kw)
+            without = vector_fit(fd, order, delay="none", **kw)
+        e1, e0 = with_delay[1].weighted_rel_rms_error, without[1].weighted_rel_rms_error
+        floor = max(e0, without[1].noise_floor or 0.0, _DELAY_EXACT)
+        pick = with_delay if e1 <= _DELAY_PAYS * floor else without
+        for note in pick[1].notes:
+            warnings.warn(note, FitWarning, stacklevel=2)
+        return pick
     if tau > 0:  # fit the response advanced by the delay; the model carries it
         data_fd = fd
         fd = fd.with_values(fd.values * np.exp(2j * np.pi * fd.freq_hz * tau)[:, None, None])
@@ -569,6 +591,8 @@ def _delay(fd: FrequencyData, delay: Any) -> float:
     return tau
 
 
+_DELAY_PAYS = 1.25  # delay="auto" keeps the delay when its error is within this factor
+_DELAY_EXACT = 1e-6  # ... of the plain fit's error, its noise floor and this level
 _FAR = 3.0  # an automatic fit this many times above the noise floor gets a note
 _DELAY_TURNS = 5.0  # phase turns over the band that point at a delay
 
