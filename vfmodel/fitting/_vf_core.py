@@ -70,6 +70,12 @@ class Problem:
         are nearly collinear; a tiny ridge picks the small-coefficient solution, whose
         out-of-band response stays of the size of the data (Hoerl & Kennard 1970,
         doi:10.1080/00401706.1970.10488634).
+    anchors : (s_v, h_v, weight) or None
+        Out-of-band anchor samples of the residue solve (common weights only): scaled
+        frequencies ``s_v`` (V,) outside the band, targets ``h_v`` (V, M) (the response at
+        the nearer band edge, real at s = 0) and their weight. They keep the model's
+        out-of-band response of the size of the data instead of whatever the poles
+        extrapolate to, at a cost in the band that the weight bounds.
     """
 
     s: ComplexArray
@@ -80,6 +86,7 @@ class Problem:
     dc_index: int | None
     pole_bounds: tuple[float, float] | None = None
     ridge: float = 0.0
+    anchors: tuple[ComplexArray, ComplexArray, float] | None = None
 
     @property
     def n_freq(self) -> int:
@@ -328,6 +335,21 @@ def _residue_system(prob: Problem, reps: ComplexArray, pf: ComplexArray | None) 
     keep = [j for j in range(a.shape[1]) if dc is None or j != n]
     if prob.w.shape[1] == 1:
         aw = a[:, keep] * w2
+        if prob.anchors is not None:
+            s_v, h_v, wgt = prob.anchors
+            pf_v = partial_fractions(s_v, reps)
+            cols = [pf_v]
+            if prob.fit_d:
+                cols.append(np.ones((s_v.size, 1), complex))
+            if prob.fit_e:
+                cols.append(s_v[:, None])
+            basis_v = np.concatenate(cols, axis=1)
+            if phi0 is not None and h0 is not None:
+                basis_v = basis_v - phi0[None, :]
+                basis_v[:, n] = 0.0
+                h_v = h_v - h0[None, :]
+            aw = np.vstack([aw, wgt * _realify(basis_v)[:, keep]])
+            b = np.vstack([b, wgt * _realify(h_v)])
     else:
         aw = a[None, :, keep] * w2.T[:, :, None]  # (M, 2K, Nk)
     return _ResidueSystem(aw, b, keep, h0, phi0)

@@ -221,6 +221,28 @@ _POLE_SPAN = (10.0, 100.0)  # S models: real poles within [f_lo / 10, 100 f_hi]
 _RIDGE = 1e-7  # S fits: Tikhonov weight of the residue solve (see _vf_core.Problem)
 
 
+_ANCHOR_BELOW = (0.5, 0.2, 0.05, 0.0)  # anchor frequencies / lowest data frequency
+_ANCHOR_ABOVE = (2.0, 5.0, 20.0, 100.0)  # anchor frequencies / highest data frequency
+_ANCHOR_WEIGHT = 1e-4  # anchor weight relative to the median data weight
+
+
+def _anchors(
+    fd: FrequencyData, h: NDArray[np.complex128], w: NDArray[np.float64], omega_scale: float
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128], float] | None:
+    """Out-of-band anchors of S fits (see :class:`_vf_core.Problem`): below the band
+    (down to 0 Hz unless the data has it) the lowest sample, above it the highest."""
+    if w.shape[1] != 1:
+        return None
+    pos = fd.omega[fd.omega > 0] / omega_scale
+    below = [] if fd.freq_hz[0] == 0.0 else [pos[0] * x for x in _ANCHOR_BELOW]
+    above = [x for x in _ANCHOR_ABOVE]
+    s_v = 1j * np.array(below + above)
+    lo, hi = h[int(np.argmax(fd.omega > 0))], h[-1]
+    h_v = np.array([lo.real if x == 0 else lo for x in below] + [hi] * len(above))
+    weight = _ANCHOR_WEIGHT * float(np.median(w[w > 0]))
+    return np.asarray(s_v, dtype=complex), np.asarray(h_v, dtype=complex), weight
+
+
 def _pole_bounds(fd: FrequencyData, omega_scale: float) -> tuple[float, float] | None:
     """Real-pole bounds of S fits (see :class:`_vf_core.Problem`); None for immittances
     and transfer functions, whose poles near 0 Hz are physical (a capacitor)."""
@@ -400,6 +422,7 @@ def vector_fit(
         dc_index=0 if has_dc and dc == "enforce" else None,
         pole_bounds=_pole_bounds(fd, omega_scale),
         ridge=_RIDGE if fd.kind == "S" else 0.0,
+        anchors=_anchors(fd, h, w, omega_scale) if fd.kind == "S" else None,
     )
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
