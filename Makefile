@@ -37,7 +37,7 @@ demo: $(VENV)/.installed
 	$(PY) scripts/demo.py --out $(DEMO_OUT)
 
 lint: $(VENV)/.installed-test
-	$(VENV)/bin/ruff check vfmodel tests scripts
+	$(VENV)/bin/ruff check vfmodel tests scripts benches
 
 typecheck: $(VENV)/.installed-test
 	$(VENV)/bin/mypy

@@ -121,16 +121,21 @@ def test_null_case_has_model_structure(name: str) -> None:
         assert _chi2(z, truth_spectra(p, case.start_effects, CFG)) > 1.15
 
 
-def test_regeneration_is_identical_to_committed() -> None:
+def test_regeneration_matches_committed() -> None:
     name = next(c.name for c in PMSM if c.effect is not None)
     d = generate(BY_NAME[name], seed=int(CASES[name]["seed"]))      # type: ignore[arg-type]
     ds = read_dataset(DIR / name)
     for t, z in d.spectra.items():
-        # CSV holds 17 significant digits: identical doubles
-        np.testing.assert_array_equal(ds.impedance[t].values[:, 0, 0], z)
+        # same seed, same noise draws; only floating-point rounding of the network solves
+        # differs between machines (BLAS kernels: 1.7e-11 relative seen on another CPU).
+        # 1e-9 relative is 100x that and 5e6 times below the 0.5 % measurement noise.
+        np.testing.assert_allclose(ds.impedance[t].values[:, 0, 0], z, rtol=1e-9, atol=0)
     for r in ds.recordings:
         y = d.recordings[float(r.speed_rpm or 0.0)]
-        np.testing.assert_array_equal(r.data.astype(np.float32), y)
+        # stored as float32: a rounding difference of 1e-11 can flip the last of 24 bits
+        # (6e-8 relative); 1e-6 of each channel's peak allows that and nothing else
+        tol = 1e-6 * np.max(np.abs(y), axis=1, keepdims=True)
+        assert np.all(np.abs(r.data.astype(np.float32) - y) <= tol)
 
 
 def test_unseen_draws_other_truth_and_sizes() -> None:

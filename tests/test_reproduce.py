@@ -137,8 +137,12 @@ def test_predict_from_netlist(run: tuple[Path, Path, dict[str, Any]]) -> None:
     assert main(["predict", str(out / "network_200rpm.cir"), str(rec), "--out", str(pdir),
                  "-q"]) == 0
     s = json.loads((pdir / "prediction.json").read_text())
-    # the same network and inputs as the reproduce validation: same peak
-    assert s["peak_model_v"] == pytest.approx(r["bearing"]["200"]["peak_model_v"], rel=1e-6)
+    # the same network and inputs as the reproduce validation: the same periodic response
+    b = r["bearing"]["200"]
+    assert s["peak_model_v"] == pytest.approx(b["peak_model_periodic_v"], rel=1e-6)
+    # reproduce adds the initial-state correction estimated from the record; the bench's
+    # records are periodic steady states, so it is small there
+    assert b["peak_model_v"] == pytest.approx(b["peak_model_periodic_v"], rel=5e-3)
     assert s["peak_measured_v"] == pytest.approx(r["bearing"]["200"]["peak_measured_v"],
                                                  rel=1e-12)
     assert main(["predict", str(out / "network_200rpm.cir"), "--inverter",

@@ -46,8 +46,9 @@ J. S. Bendat, A. G. Piersol, *Random Data*, 4th ed., Wiley, 2010 (H1 estimator).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -74,6 +75,7 @@ from vfmodel.greybox.assembly import default_params, divider_capacitances
 from vfmodel.greybox.bvr_baseline import average_bvr, common_mode
 from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
     "STANDSTILL_HIDDEN",
@@ -85,13 +87,17 @@ __all__ = [
     "fit_stage",
     "identify",
     "initial_params",
+    "log_interval",
     "lubricant_names",
     "machine_names",
     "thin_spectra",
 ]
 
 ArrF = NDArray[np.float64]
-Term = ImpedanceTerm | BearingTerm
+Term = ImpedanceTerm | BearingTerm | RecordTerm
+RotatingFit = Literal["record", "h1"]
+"""Condition 2 at the rotating speeds: output-error fit of the whole record
+(:mod:`vfmodel.greybox.record_fit`, default) or the H1 transfer (paper eq. 21)."""
 
 STANDSTILL_HIDDEN = ("airgap.C_rf", "bearing.C_air")
 """Parameters the standstill data cannot separate: with the metallic contact closed the
@@ -117,6 +123,8 @@ class StageReport:
     nfev: int
     status: int
     rel_std: dict[str, float] = field(default_factory=dict)
+    cov_log: NDArray[np.float64] | None = None
+    corr_factor: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -128,6 +136,7 @@ class SpeedFit:
     params: ParamSet
     term: BearingTerm
     report: StageReport | None
+    record: RecordTerm | None = None
 
 
 @dataclass(frozen=True)
@@ -290,25 +299,33 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     r, jm = fun(res.x), jac(res.x)
     dof = max(r.size - len(names), 1)
     chi2 = float(r @ r) / dof
-    rel = _rel_std(jm, chi2)
-    return params.from_log(res.x, names), StageReport(
+    p_out = params.from_log(res.x, names)
+    # residual samples of a waveform fit are correlated: inflate the covariance by the
+    # terms' variance-inflation factor (effective number of independent samples)
+    infl = 1.0
+    for term, _ in terms:
+        if isinstance(term, RecordTerm):
+            infl = max(infl, term.correlation_factor(p_out))
+    cov = _cov_log(jm, chi2 * infl)
+    rel = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return p_out, StageReport(
         stage, names, int(r.size), chi2, int(res.nfev), int(res.status),
-        {n: float(s) for n, s in zip(names, rel, strict=True)})
+        {n: float(s) for n, s in zip(names, rel, strict=True)}, cov, infl)
 
 
-def _rel_std(jac: ArrF, chi2_red: float) -> ArrF:
-    """Standard deviation of ``log p`` from ``chi2_red (J^T J)^+`` (SVD pseudo-inverse)."""
+def _cov_log(jac: ArrF, scale: float) -> ArrF:
+    """Covariance of ``log p``: ``scale (J^T J)^+`` (SVD pseudo-inverse); a direction the
+    data do not see at all gets an infinite variance on its diagonal."""
+    n = jac.shape[1]
     if jac.size == 0:
-        return np.zeros(jac.shape[1])
+        return np.zeros((n, n))
     _, s, vt = np.linalg.svd(jac, full_matrices=False)
     keep = s > s[0] * 1e-10
-    cov = (vt[keep].T / s[keep] ** 2) @ vt[keep]
-    var = np.diag(cov) * chi2_red
-    # a direction the data do not see at all: infinite uncertainty
-    null = np.sum(vt[~keep] ** 2, axis=0) > 1e-6 if np.any(~keep) else np.zeros(jac.shape[1], bool)
-    out = np.sqrt(np.maximum(var, 0.0))
-    out[null] = np.inf
-    return out
+    cov = (vt[keep].T / s[keep] ** 2) @ vt[keep] * scale
+    if np.any(~keep):
+        null = np.sum(vt[~keep] ** 2, axis=0) > 1e-6
+        cov[null, null] = np.inf
+    return np.asarray(cov, dtype=float)
 
 
 def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
@@ -321,7 +338,7 @@ def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
                            progress=progress)
         if best is None or rep.chi2_red < best[1].chi2_red:
             best = (p, StageReport(stage, rep.names, rep.n_residuals, rep.chi2_red, rep.nfev,
-                                   rep.status, rep.rel_std))
+                                   rep.status, rep.rel_std, rep.cov_log, rep.corr_factor))
     assert best is not None
     return best
 
@@ -346,7 +363,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              progress: Progress = no_progress,
              standstill_weighting: H1Weighting = "covariance",
              input_noise: bool = True,
-             hold_standstill: Sequence[str] = STANDSTILL_HIDDEN) -> Identification:
+             hold_standstill: Sequence[str] = STANDSTILL_HIDDEN,
+             rotating_fit: RotatingFit = "record") -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -470,11 +488,14 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         if s in stand:
             continue
         bterm = bearing_term(prep[s], spec, cur, "rotating")
+        rterm = record_term(prep[s], spec, cur, "rotating") if rotating_fit == "record" \
+            else None
         starts = _lubricant_starts(cur, prep[s], eff)
-        fit_p, rep = _best_of(starts, [(bterm, 1.0)], lub, f"lubricant {s:g} rpm", max_nfev,
+        fit_terms: list[tuple[Term, float]] = [(rterm if rterm is not None else bterm, 1.0)]
+        fit_p, rep = _best_of(starts, fit_terms, lub, f"lubricant {s:g} rpm", max_nfev,
                               prior_sigma, progress)
         stages.append(rep)
-        fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep))
+        fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep, rterm))
         cur = fit_p
     fits.sort(key=lambda f: f.speed_rpm)
     if imp is not None and stand:
@@ -497,3 +518,36 @@ def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
                                                  "bearing.C_edge") if n in previous}
             starts.append(previous.with_values(upd, clip=True))
     return starts
+
+
+def log_interval(params: ParamSet, report: StageReport,
+                 quantity: Callable[[ParamSet], float],
+                 level_z: float = 1.959964) -> dict[str, float | None]:
+    """Value and 95 % interval of a positive derived ``quantity(params)`` from a stage's
+    covariance of ``log p`` (delta method in log space: ``var log q = g^T C g`` with
+    ``g = d log q / d log p`` by central differences of step 1e-4).
+
+    Returns ``value``, ``lo``, ``hi`` and ``std_log`` (``lo``/``hi``/``std_log`` ``None``
+    when the data do not bound it: an infinite variance).
+    """
+    q0 = float(quantity(params))
+    if report.cov_log is None or q0 <= 0:
+        return {"value": q0, "lo": None, "hi": None, "std_log": None}
+    names = report.names
+    x0 = params.to_log(names)
+    g = np.zeros(len(names))
+    for j in range(len(names)):
+        xp, xm = x0.copy(), x0.copy()
+        xp[j] += 1e-4
+        xm[j] -= 1e-4
+        qp = quantity(params.from_log(xp, names))
+        qm = quantity(params.from_log(xm, names))
+        g[j] = (np.log(qp) - np.log(qm)) / 2e-4 if qp > 0 and qm > 0 else 0.0
+    cov = report.cov_log
+    used = np.abs(g) > 1e-9
+    if not np.all(np.isfinite(cov[np.ix_(used, used)])):
+        return {"value": q0, "lo": None, "hi": None, "std_log": None}
+    var = float(g[used] @ cov[np.ix_(used, used)] @ g[used])
+    sd = float(np.sqrt(max(var, 0.0)))
+    return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
+            "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd}

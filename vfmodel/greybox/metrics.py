@@ -108,6 +108,25 @@ def peak_errors(peak_model: float, peak_meas: float) -> tuple[float, float]:
     return float(err), float(100.0 * err / peak_meas) if peak_meas > 0 else float("inf")
 
 
+PLATEAU_F_HZ = 200e3
+"""Upper frequency of the plateau metric: below it the bearing voltage is the capacitive
+divider's step after each edge and the film's level between edges; above it the ringing."""
+
+
+def plateau_rel_err_pct(u_model: ArrayLike, u_meas: ArrayLike, fs: float, *,
+                        f_max_hz: float = PLATEAU_F_HZ) -> float:
+    """Relative RMS error (%) of the bearing voltage below ``f_max_hz`` (brickwall):
+    ``100 ||lp(u_model) - lp(u_meas)|| / ||lp(u_meas)||`` without the mean (DC offset of
+    the probe). This is the plateau after each switching edge (the bearing-voltage ratio of
+    the capacitive divider) and the level between edges, without the ringing."""
+    a = brickwall_filter(np.asarray(u_model, dtype=float), fs, f_max_hz)
+    b = brickwall_filter(np.asarray(u_meas, dtype=float), fs, f_max_hz)
+    a = a - a.mean()
+    b = b - b.mean()
+    nb = float(np.linalg.norm(b))
+    return float(100.0 * np.linalg.norm(a - b) / nb) if nb > 0 else float("inf")
+
+
 def spectral_corr(u_model: ArrayLike, u_meas: ArrayLike, fs: float, *,
                   f_max_hz: float = F_CUT_HZ) -> float:
     """Pearson correlation of ``|FFT|`` of two records over the bins 0..``f_max_hz``."""

@@ -36,14 +36,21 @@ from vfmodel.greybox.assembly import divider_capacitances
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.bvr_baseline import BvrBaseline, bvr_baseline, predict_bvr
 from vfmodel.greybox.effects import PAPER_EFFECTS
-from vfmodel.greybox.identify import Identification, film_equivalent, identify
+from vfmodel.greybox.identify import (
+    Identification,
+    film_equivalent,
+    identify,
+    log_interval,
+)
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
     mape_pct,
     peak_errors,
     peak_v,
+    plateau_rel_err_pct,
     spectral_corr,
 )
+from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.h1 import bvr as bvr_estimate
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
@@ -140,6 +147,15 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     dc = divider_capacitances(ident.params, eff)
     bearing: dict[str, Any] = {}
     base: dict[str, Any] = {"c_wr_f": dc["c_wr"], "c_rf_f": dc["c_rf"]}
+    # 95 % intervals of the divider capacitances from the last machine stage
+    mach = [s for s in ident.stages if s.cov_log is not None
+            and not s.name.startswith("lubricant")]
+    divider_iv: dict[str, Any] = {}
+    if mach:
+        for key in ("c_wr", "c_rf"):
+            def cap(q: ParamSet, k: str = key) -> float:
+                return divider_capacitances(q, eff)[k]
+            divider_iv[f"{key}_f"] = log_interval(ident.params, mach[-1], cap)
     speeds: list[SpeedResult] = []
     rel_rot, corr_all = [], []
     n_sp = len(ident.speeds)
@@ -147,7 +163,10 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         progress("validation", k, n_sp)
         term = sf.term
         prep = term.prep
-        u_model = term.output(sf.params)
+        # rotating records fitted as waveforms carry their initial-state correction
+        u_periodic = term.output(sf.params)
+        u_model = (u_periodic + sf.record.transient(sf.params) if sf.record is not None
+                   else u_periodic)
         pk_meas = peak_v(prep.bearing, prep.fs, filtered=True)
         pk_model = peak_v(u_model, prep.fs, filtered=True)
         abs_err, rel_err = peak_errors(pk_model, pk_meas)
@@ -159,8 +178,20 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
             "rel_err_pct": _f(rel_err), "spectral_corr": corr, "lubricant": lub,
             "state": sf.state, "residual_rms_v": float(np.std(prep.bearing - u_model)),
+            "plateau_rel_err_pct": _f(plateau_rel_err_pct(u_model, prep.bearing, prep.fs)),
+            # the network's periodic response alone (what `predict` computes from the
+            # netlist), without the initial-state correction estimated from the record
+            "peak_model_periodic_v": peak_v(u_periodic, prep.fs, filtered=True),
         }
         if sf.report is not None:
+            rep = sf.report
+            # 95 % intervals (delta method on the stage's posterior covariance of log p)
+            entry["lubricant_interval"] = {
+                "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
+                "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
+                "c_b_f": log_interval(sf.params, rep,
+                                      lambda q: divider_capacitances(q, eff)["c_b"]),
+            }
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
             entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
         bearing[key] = entry
@@ -173,7 +204,9 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         pk_b = peak_v(u_bvr, prep.fs, filtered=True)
         _, rel_b = peak_errors(pk_b, pk_meas)
         base[key] = {"bvr": bl.bvr, "c_b_f": bl.c_b_f, "peak_model_v": pk_b,
-                     "rel_err_pct": _f(rel_b), "bvr_average": bl.bvr_average}
+                     "rel_err_pct": _f(rel_b), "bvr_average": bl.bvr_average,
+                     "plateau_rel_err_pct": _f(plateau_rel_err_pct(u_bvr, prep.bearing,
+                                                                   prep.fs))}
         # BVR(f) (Fig. 11) measured and modelled, same estimator
         tu, tv, tw = prep.terminals
         nps = prep.h1.nperseg * prep.n_samples // prep.n_h1   # same segment duration
@@ -193,11 +226,14 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         rpm_key(s.speed_rpm): bool(bearing[rpm_key(s.speed_rpm)]["rel_err_pct"]
                                    < base[rpm_key(s.speed_rpm)]["rel_err_pct"])
         for s in speeds}
+    # speeds where the classical divider predicts the peak better: flagged, not averaged
+    res["flagged_speeds"] = [k for k, v in res["greybox_beats_baseline"].items() if not v]
     # ---- identification summary
     res["model"] = {
         **ident.spec.to_json_dict(),
         "params": ident.params.as_dict(),
         "rel_std": {n: _f(v) for n, v in ident.machine_rel_std.items()},
+        "divider_intervals": divider_iv,
         "stages": [{"name": s.name, "chi2_red": s.chi2_red, "nfev": s.nfev,
                     "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],
         "speeds": {rpm_key(s.speed_rpm): {"state": s.state, "params": s.params.as_dict()}

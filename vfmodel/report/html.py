@@ -15,7 +15,8 @@ __all__ = ["reproduce_html", "write_reproduce_html"]
 _CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
 table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;
 text-align:right}th{background:#eee}td:first-child{text-align:left}
-img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}.ok{color:#070}.bad{color:#a00}"""
+img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}.ok{color:#070}.bad{color:#a00}
+.warn{color:#a00}"""
 
 
 def _fmt(x: Any, digits: int = 4) -> str:
@@ -56,13 +57,24 @@ def reproduce_html(results: dict[str, Any], figures: Sequence[str]) -> str:
             if not isinstance(v, dict):
                 continue
             b = base.get(k, {})
+            beats = results.get("greybox_beats_baseline", {}).get(k)
             rows.append((k, v["peak_measured_v"], v["peak_model_v"], v["abs_err_v"],
-                         v["rel_err_pct"], v["spectral_corr"], b.get("peak_model_v"),
-                         b.get("rel_err_pct")))
+                         v["rel_err_pct"], v["spectral_corr"], v.get("plateau_rel_err_pct"),
+                         b.get("peak_model_v"), b.get("rel_err_pct"),
+                         b.get("plateau_rel_err_pct"),
+                         "-" if beats is None else ("yes" if beats else "NO (flagged)")))
+        flagged = results.get("flagged_speeds") or []
         parts += ["<h2>Bearing voltage (condition 2, paper Tables III and IV)</h2>",
                   _table(["speed (rpm)", "peak measured (V)", "peak grey box (V)",
                           "abs. error (V)", "rel. error (%)", "spectral corr.",
-                          "peak BVR model (V)", "BVR rel. error (%)"], rows),
+                          "plateau error (%)", "peak BVR model (V)", "BVR rel. error (%)",
+                          "BVR plateau error (%)", "grey box better than BVR"], rows),
+                  "<p>plateau error: relative RMS error of the bearing voltage below "
+                  "200 kHz (the capacitive-divider step after each edge and the level "
+                  "between edges).</p>",
+                  ("<p class='warn'><b>The classical BVR model predicts the peak better at "
+                   f"{', '.join(html.escape(str(x)) for x in flagged)} rpm.</b></p>"
+                   if flagged else ""),
                   "<p>mean relative peak error (rotating): "
                   f"{_fmt(bea.get('mean_rel_err_pct_rotating'))} %; mean spectral "
                   f"correlation: {_fmt(bea.get('mean_spectral_corr'))}</p>"]
