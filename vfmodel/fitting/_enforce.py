@@ -73,10 +73,10 @@ _GRID_LOG = 1500  # log-spaced grid points over the poles +- 2 decades
 _TIKHONOV = 1e-5
 # Objective forms and Clarabel settings tried in turn until one ends "optimal". The result
 # is certified by the Hamiltonian test, not by the solver.
-_TOL = {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}
+_TOL = {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-8, "tol_feas": 1e-8}
 _ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("norm", _TOL),
     ("sumsq", _TOL),
-    ("norm", {}),
     ("sumsq", {"static_regularization_constant": 1e-7, "max_step_fraction": 0.95}),
     ("norm", {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-6}),
 )
