@@ -190,12 +190,7 @@ MODEL_CASES: dict[str, str | bytes] = {
 # model.json reading lives in vfmodel/fitting/model_json.py and core/rational_model.py
 # (issue 13); these cases are refused with InputError but the message lacks the file name,
 # and a NaN token is accepted: reported, not fixed here
-_MJ_OPEN = {"mj_bad_kind", "mj_unstable_inf", "mj_nan_token"}
-
-
-@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.xfail(
-    reason="model.json reader (issue-13 files): message without the file name / NaN token",
-    strict=False)) if c in _MJ_OPEN else c for c in sorted(MODEL_CASES)])
+@pytest.mark.parametrize("case", sorted(MODEL_CASES))
 def test_bad_model_json(case: str, tmp_path: Path) -> None:
     from vfmodel.fitting.model_json import read_model_json
 

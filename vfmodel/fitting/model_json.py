@@ -160,12 +160,23 @@ def read_model_json(path: str | os.PathLike[str]) -> RationalModel:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as err:
         raise InputError(f"cannot read model file: {err.strerror}", source=src) from None
+    def no_constant(token: str) -> float:
+        # Python's json accepts NaN/Infinity tokens; model.json is strict JSON
+        raise InputError("not strict JSON", source=src, found=f"the token {token}",
+                         expected="finite numbers (an unbounded value is null)")
+
     try:
-        obj = json.loads(text)
+        obj = json.loads(text, parse_constant=no_constant)
     except json.JSONDecodeError as err:
         raise InputError(
             "not valid JSON", source=src, place=f"line {err.lineno}, column {err.colno}"
         ) from None
     if not isinstance(obj, dict):
         raise InputError("not a vfmodel model", source=src, expected="a JSON object")
-    return RationalModel.from_json_dict(obj, source=src)
+    try:
+        return RationalModel.from_json_dict(obj, source=src)
+    except (InputError, ValueError, TypeError) as err:
+        # every message names the file, whichever check refused the content
+        if isinstance(err, InputError) and src in str(err):
+            raise
+        raise InputError(str(err), source=src) from None
