@@ -187,9 +187,7 @@ MODEL_CASES: dict[str, str | bytes] = {
 }
 
 
-# model.json reading lives in vfmodel/fitting/model_json.py and core/rational_model.py
-# (issue 13); these cases are refused with InputError but the message lacks the file name,
-# and a NaN token is accepted: reported, not fixed here
+# every malformed model.json is refused with an InputError naming the file
 @pytest.mark.parametrize("case", sorted(MODEL_CASES))
 def test_bad_model_json(case: str, tmp_path: Path) -> None:
     from vfmodel.fitting.model_json import read_model_json
