@@ -425,7 +425,10 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
 def _gram_rows(gram: FloatArray) -> FloatArray:
     """Square-root rows ``R`` with ``R^T R = gram`` (symmetric PSD, diagonally scaled)."""
     dsc = 1.0 / np.sqrt(np.maximum(np.diag(gram), _TINY))
-    lam, vec = np.linalg.eigh(dsc[:, None] * gram * dsc[None, :])
+    scaled = dsc[:, None] * gram * dsc[None, :]
+    if not np.all(np.isfinite(scaled)):
+        raise np.linalg.LinAlgError("non-finite Gram matrix")
+    lam, vec = np.linalg.eigh(scaled)
     out: FloatArray = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
     return out
 
@@ -461,7 +464,10 @@ def _sigma_rows_common(
     power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
     gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
     bflat = bq.reshape(-1, n1)
-    return _gram_rows(gram - bflat.T @ bflat)
+    try:
+        return _gram_rows(gram - bflat.T @ bflat)
+    except np.linalg.LinAlgError:  # the squared system lost it: the exact rows
+        return _sigma_rows_common(prob, basis_c, basis_s, True)
 
 
 def _sigma_rows_per_response(
@@ -482,7 +488,10 @@ def _sigma_rows_per_response(
     power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
     gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
     bflat = bq.reshape(-1, n1)
-    return _gram_rows(gram - bflat.T @ bflat)
+    try:
+        return _gram_rows(gram - bflat.T @ bflat)
+    except np.linalg.LinAlgError:  # the squared system lost it: the exact rows
+        return _sigma_rows_per_response(prob, basis_c, basis_s, True)
 
 
 def relocate_poles(

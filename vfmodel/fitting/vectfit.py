@@ -227,11 +227,15 @@ _ANCHOR_WEIGHT = 1e-4  # anchor weight relative to the median data weight
 
 
 def _anchors(
-    fd: FrequencyData, h: NDArray[np.complex128], w: NDArray[np.float64], omega_scale: float
+    fd: FrequencyData,
+    h: NDArray[np.complex128],
+    w: NDArray[np.float64],
+    omega_scale: float,
+    rel_weight: float | None,
 ) -> tuple[NDArray[np.complex128], NDArray[np.complex128], float] | None:
     """Out-of-band anchors of S fits (see :class:`_vf_core.Problem`): below the band
     (down to 0 Hz unless the data has it) the lowest sample, above it the highest."""
-    if w.shape[1] != 1:
+    if w.shape[1] != 1 or rel_weight == 0:
         return None
     pos = fd.omega[fd.omega > 0] / omega_scale
     below = [] if fd.freq_hz[0] == 0.0 else [pos[0] * x for x in _ANCHOR_BELOW]
@@ -239,7 +243,8 @@ def _anchors(
     s_v = 1j * np.array(below + above)
     lo, hi = h[int(np.argmax(fd.omega > 0))], h[-1]
     h_v = np.array([lo.real if x == 0 else lo for x in below] + [hi] * len(above))
-    weight = _ANCHOR_WEIGHT * float(np.median(w[w > 0]))
+    rel = _ANCHOR_WEIGHT if rel_weight is None else float(rel_weight)
+    weight = rel * float(np.median(w[w > 0]))
     return np.asarray(s_v, dtype=complex), np.asarray(h_v, dtype=complex), weight
 
 
@@ -278,6 +283,7 @@ def vector_fit(
     dc: DcMode = "enforce",
     target_error: float | None = None,
     delay: float | Literal["auto", "none"] = "none",
+    out_of_band_weight: float | None = None,
 ) -> tuple[RationalModel, FitReport]:
     """Fit a rational model with common poles to every entry of a frequency response.
 
@@ -346,6 +352,13 @@ def vector_fit(
         noise floor estimate and 1e-6 (reflections advanced
         by a transmission's delay can be harder to fit than the plain data).
 
+    out_of_band_weight : float, optional
+        S data: weight, relative to the median data weight, of out-of-band anchor
+        samples (below the band down to 0 Hz the lowest sample, above it the highest)
+        that keep the model's out-of-band response of the size of the data; default
+        1e-4 (barely felt in the band). Larger values (0.01-0.1) trade in-band accuracy
+        for out-of-band passivity before an enforcement.
+
     Returns
     -------
     model : RationalModel
@@ -391,7 +404,7 @@ def vector_fit(
               "fit_e": fit_e, "initial_poles": initial_poles,
               "max_iterations": max_iterations, "tol": tol, "max_order": max_order,
               "enforce_stability": enforce_stability, "exclude": exclude, "dc": dc,
-              "target_error": target_error}
+              "target_error": target_error, "out_of_band_weight": out_of_band_weight}
         with warnings.catch_warnings(record=True):
             warnings.simplefilter("always")
             with_delay = vector_fit(fd, order, delay=tau, **kw)
@@ -422,7 +435,8 @@ def vector_fit(
         dc_index=0 if has_dc and dc == "enforce" else None,
         pole_bounds=_pole_bounds(fd, omega_scale),
         ridge=_RIDGE if fd.kind == "S" else 0.0,
-        anchors=_anchors(fd, h, w, omega_scale) if fd.kind == "S" else None,
+        anchors=(_anchors(fd, h, w, omega_scale, out_of_band_weight)
+                 if fd.kind == "S" else None),
     )
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
