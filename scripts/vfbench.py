@@ -173,7 +173,6 @@ def _vf_case(path: Path, runs: int) -> dict[str, Any]:
     from vfmodel import read_spectrum
     from vfmodel.errors import InputError, VfmodelError
     from vfmodel.fitting.data_passivity import data_passivity
-    from vfmodel.fitting.passivity import enforce_passivity
     from vfmodel.fitting.vectfit import fit_errors, vector_fit
     from vfmodel.pipeline.fit_job import run_fit
 
@@ -194,8 +193,9 @@ def _vf_case(path: Path, runs: int) -> dict[str, Any]:
             row["note"] = f"active data (floor {dp.floor:.2g}): enforcement refused"
             return row
         model, check = res.model, res.passivity
-        if check is not None and not check.passive:
-            model, check = enforce_passivity(model, res.data)
+        if check is not None and not check.passive:  # as `vfmodel fit --passive` does
+            enf = run_fit([data], passive=True, delay="auto")
+            model, check = enf.model, enf.passivity
         row["err_pas"] = fit_errors(model, res.data)[1]
         row["cert"] = bool(check is not None and check.passive)
         row["sigma"] = _dense_sigma(model, res.data.freq_hz)
