@@ -12,6 +12,15 @@ with other truth values, effect sizes and noise (``make_concealed.py --seed SEED
 into a temporary directory and scores those (``--truth-rungs``/``--truth-sections``: with
 another discretisation of the truth network than the detective's). Prints one line per
 case and a summary; exit 1 when a case fails.
+
+``--save FILE`` writes per case the time, the findings and chi2_red (start, final) as
+JSON; ``--baseline FILE`` (saved by an earlier version) prints them beside this run's
+(issue 18: target < 90 s per PMSM case on 2 idle cores, same findings and chi2).
+
+Profile one case (the output is not committed):
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python -m cProfile -o /tmp/diag.prof \
+        scripts/bench_diagnose.py --only pmsm_winding_skin
 """
 
 from __future__ import annotations
@@ -66,6 +75,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="with --unseen: rungs of the truth's skin-effect ladders")
     ap.add_argument("--truth-sections", type=int, default=None,
                     help="with --unseen: winding sections of the truth")
+    ap.add_argument("--save", default=None, help="write per-case results as JSON")
+    ap.add_argument("--baseline", default=None,
+                    help="JSON of an earlier --save: print its results beside this run's")
     a = ap.parse_args(argv)
     if (a.truth_rungs or a.truth_sections) and a.unseen is None:
         ap.error("--truth-rungs/--truth-sections need --unseen SEED")
@@ -84,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     cases = json.loads((root / "cases.json").read_text())
     only = set(a.only.split(",")) if a.only else None
     ok_all = True
+    saved: dict[str, dict[str, Any]] = {}
+    old = json.loads(Path(a.baseline).read_text()) if a.baseline else {}
     print(f"{'case':28s} {'ok':3s} {'time s':>7s} {'chi2 start':>10s} {'chi2 final':>10s}  "
           "findings / problem")
     for name, case in sorted(cases.items()):
@@ -96,6 +110,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name:28s} {'yes' if ok else 'NO':3s} {dt:7.1f} "
               f"{doc['start']['chi2_red']:10.3f} {doc['final']['chi2_red']:10.3f}  "
               f"{found}{'  [' + why + ']' if why else ''}", flush=True)
+        saved[name] = {"ok": ok, "time_s": dt, "chi2_start": doc["start"]["chi2_red"],
+                       "chi2_final": doc["final"]["chi2_red"], "findings": found}
+        if name in old:
+            b = old[name]
+            rel = abs(saved[name]["chi2_final"] - b["chi2_final"]) / abs(b["chi2_final"])
+            print(f"{'  baseline':28s} {'yes' if b['ok'] else 'NO':3s} {b['time_s']:7.1f} "
+                  f"{b['chi2_start']:10.3f} {b['chi2_final']:10.3f}  {b['findings']}  "
+                  f"(chi2 final {saved[name]['chi2_final']:.8g} vs {b['chi2_final']:.8g}, "
+                  f"rel. change {rel:.1e}; same findings: {b['findings'] == found})",
+                  flush=True)
+    if a.save:
+        Path(a.save).write_text(json.dumps(saved, indent=1))
     if tmp is not None:
         tmp.cleanup()
     print("all cases correct" if ok_all else "SOME CASES FAILED")

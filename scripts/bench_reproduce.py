@@ -2,12 +2,26 @@
 """Benchmark of ``vfmodel reproduce``: time of each stage and the acceptance numbers.
 
     .venv/bin/python scripts/bench_reproduce.py [DATASET] [--out DIR] [--ngspice]
+        [--save FILE] [--baseline FILE]
 
 Runs the reproduce pipeline (identification, validation, BVR baseline, black box) on
 DATASET (default data/pmsm40kw), writes the outputs like the CLI, prints the wall time per
 progress stage and the must-show numbers of issue 7 against their targets, and with
 ``--ngspice`` checks that ngspice's .ac of every exported netlist reproduces the modelled
 impedances (max relative deviation).
+
+``--save FILE`` writes the times and accuracy figures as JSON; ``--baseline FILE`` (a file
+saved by an earlier version) prints them side by side with this run's, with the largest
+relative change of the accuracy figures (issue 18: a speed-up keeps the figures).
+
+Profile (issue 18; the output is not committed):
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python -m cProfile -o /tmp/repro.prof \
+        scripts/bench_reproduce.py data/pmsm40kw
+    .venv/bin/python -c "import pstats; pstats.Stats('/tmp/repro.prof')\
+        .sort_stats('cumulative').print_stats(40)"
+
+(or ``py-spy record -o repro.svg -- .venv/bin/python scripts/bench_reproduce.py``).
 """
 
 from __future__ import annotations
@@ -16,6 +30,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default=None, help="output directory (default: a temp dir)")
     ap.add_argument("--sections", default="2,3,4")
     ap.add_argument("--ngspice", action="store_true")
+    ap.add_argument("--save", default=None, help="write times and figures as JSON")
+    ap.add_argument("--baseline", default=None,
+                    help="JSON of an earlier --save: print its figures beside this run's")
     a = ap.parse_args(argv)
 
     from vfmodel.cli._common import write_json
@@ -70,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         if s in times:
             print(f"  {s:40s} {times[s]:7.1f} s")
     print(f"  {'figures, report, netlists':40s} {t_write:7.1f} s")
-    print(f"total {t_pipe + t_write:.1f} s (target < 300 s on 2 cores); outputs in {out}")
+    print(f"total {t_pipe + t_write:.1f} s (target < 30 s on 2 cores, idle); outputs in {out}")
     r = res.results
     imp, bea = r["impedance"], r["bearing"]
     base = r["baseline_bvr"]
@@ -104,6 +122,13 @@ def main(argv: list[str] | None = None) -> int:
                       f"({100 * (v['peak_model_v'] / c - 1):+.1f} %), measured "
                       f"{v['peak_measured_v']:.3f} V ({100 * (v['peak_measured_v'] / c - 1):+.1f} %"
                       f" from noise)")
+    figs_now = figures(r, times, t_pipe + t_write, t_write)
+    if a.save:
+        import json
+
+        Path(a.save).write_text(json.dumps(figs_now, indent=1))
+    if a.baseline:
+        compare(figs_now, a.baseline)
     if a.ngspice:
         from vfmodel.circuit.ngspice import run_ac
         from vfmodel.circuit.spice_import import from_spice
@@ -121,6 +146,52 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ngspice .ac of {len(res.netlists)} netlists x 6 topologies: max rel. "
               f"deviation {worst:.2e} (target <= 1e-6)")
     return 0
+
+
+def figures(r: dict[str, Any], times: dict[str, float], total_s: float,
+            write_s: float) -> dict[str, dict[str, float]]:
+    """Times (s) and accuracy figures of a run, flat, for --save / --baseline."""
+    acc: dict[str, float] = {
+        "n_sections": float(r["model"]["n_sections"]),
+        "impedance mean MAPE %": r["impedance"]["mean_mape_pct"],
+        "impedance mean coherence": r["impedance"]["mean_coherence"],
+    }
+    bea, base = r["bearing"], r["baseline_bvr"]
+    for k, v in bea.items():
+        if isinstance(v, dict):
+            acc[f"{k} rpm peak model V"] = v["peak_model_v"]
+            acc[f"{k} rpm rel err %"] = v["rel_err_pct"]
+            acc[f"{k} rpm spectral corr"] = v["spectral_corr"]
+            acc[f"{k} rpm resid rms V"] = v["residual_rms_v"]
+            acc[f"{k} rpm film R ohm"] = v["lubricant"]["r_ohm"]
+            acc[f"{k} rpm film C F"] = v["lubricant"]["c_f"]
+            acc[f"{k} rpm BVR peak V"] = base[k]["peak_model_v"]
+    acc["mean rel err rotating %"] = bea.get("mean_rel_err_pct_rotating", float("nan"))
+    acc["mean spectral corr"] = bea["mean_spectral_corr"]
+    tm = {"total": total_s, "figures, report, netlists": write_s, **times}
+    return {"times_s": tm, "figures": {k: float(v) for k, v in acc.items()}}
+
+
+def compare(now: dict[str, dict[str, float]], baseline: str) -> None:
+    """Print this run's times and figures beside those of ``baseline`` (JSON of --save)."""
+    import json
+
+    old = json.loads(Path(baseline).read_text())
+    print(f"\n{'':40s} {'this run':>12s} {'baseline':>12s}")
+    for k in ("total", *sorted(set(now["times_s"]) - {"total"})):
+        a, b = now["times_s"].get(k), old["times_s"].get(k)
+        print(f"  {k:38s} {_fmt(a):>12s} {_fmt(b):>12s}  s")
+    worst = 0.0
+    for k, a in now["figures"].items():
+        b = old["figures"].get(k)
+        rel = abs(a - b) / max(abs(b), 1e-300) if b is not None else float("nan")
+        worst = max(worst, rel) if np.isfinite(rel) else worst
+        print(f"  {k:38s} {a:12.6g} {_fmt(b, '.6g'):>12s}  rel. change {rel:.1e}")
+    print(f"largest relative change of the accuracy figures: {worst:.1e}")
+
+
+def _fmt(x: float | None, spec: str = ".1f") -> str:
+    return "-" if x is None else format(x, spec)
 
 
 if __name__ == "__main__":

@@ -451,17 +451,25 @@ class MnaSystem:
         assert sol.x is not None and sol.lam is not None
         s = np.asarray(2j * np.pi * _freq(freq_hz), dtype=np.complex128)
         _, dq = self._q(v)
-        # per triplet t: -lam[row_t] * coef_t * (s or 1) * x[col_t], summed per parameter
-        w = np.where(self.t_is_c[None, :], s[:, None], 1.0) * self.t_coef[None, :]
-        lr = sol.lam[:, self.t_row, :]                       # (f, t, o)
-        xc = sol.x[:, self.t_col, :]                         # (f, t, i)
-        prod = -np.einsum("fto,fti,ft->foit", lr, xc, w, optimize=True)
+        # per triplet t: -lam[row_t] * coef_t * (s or 1) * x[col_t], summed per parameter:
+        # the products lam x of every triplet times two sparse (triplet x parameter)
+        # matrices of the coefficients (G and C triplets), in frequency chunks
         n_p = len(self.param_names)
-        jac = np.zeros((*prod.shape[:3], n_p), dtype=complex)
-        if self.t_param.size:
-            starts = np.flatnonzero(np.r_[True, np.diff(self.t_param) != 0])
-            present = self.t_param[starts]
-            jac[..., present] = np.add.reduceat(prod, starts, axis=3)
+        n_t = self.t_row.size
+        n_o, n_i = sol.lam.shape[2], sol.x.shape[2]
+        jac = np.zeros((s.size, n_o, n_i, n_p), dtype=complex)
+        if n_t:
+            tix = np.arange(n_t)
+            sel = [sp.csr_array((np.where(self.t_is_c == is_c, self.t_coef, 0.0),
+                                 (tix, self.t_param)), shape=(n_t, n_p))
+                   for is_c in (False, True)]
+            step = max(1, _CHUNK_BYTES // (32 * n_o * n_i * n_t))
+            for a in range(0, s.size, step):
+                lr = np.swapaxes(sol.lam[a:a + step, self.t_row, :], 1, 2)   # (f, o, t)
+                xc = np.swapaxes(sol.x[a:a + step, self.t_col, :], 1, 2)     # (f, i, t)
+                prod = (lr[:, :, None, :] * xc[:, None, :, :]).reshape(-1, n_t)
+                jg, jc = (np.asarray(prod @ m).reshape(-1, n_o, n_i, n_p) for m in sel)
+                jac[a:a + step] = -(jg + s[a:a + step, None, None, None] * jc)
         dsl = jac.copy()                                      # d h / d q
         jac *= dq
         if self.mut_params.size:
@@ -568,22 +576,37 @@ def _solve_dense(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) 
 
 
 def _solve_sparse(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -> Solution:
-    gs = sp.csc_matrix(g)
-    cs = sp.csc_matrix(c)
+    """SuperLU per frequency, one factorisation for ``x`` and ``lambda``. The CSC pattern
+    of ``G + sC`` (the union of both; at ``s = 0`` that of ``G``) is found once and only
+    its values change per frequency: the matrix handed to SuperLU is the one
+    ``csc(G) + s csc(C)`` gives, entry for entry, without rebuilding sparse objects."""
     n = g.shape[0]
     h = np.empty((s.size, cout.shape[1], b.shape[1]), complex)
     x = np.empty((s.size, n, b.shape[1]), complex) if adjoint else None
     lam = np.empty((s.size, n, cout.shape[1]), complex) if adjoint else None
+    bc = np.asarray(b, dtype=complex)
+    cc = np.asarray(cout, dtype=complex)
+    patterns: dict[bool, tuple[ArrF, ArrF, NDArray[np.intc], NDArray[np.intc]]] = {}
     for k, sk in enumerate(s):
+        dc_only = bool(sk == 0)
+        if dc_only not in patterns:
+            # column-major nonzeros = canonical CSC order (sorted rows in each column)
+            mask = (g != 0) if dc_only else ((g != 0) | (c != 0))
+            cols, rows = np.nonzero(mask.T)
+            indptr = np.zeros(n + 1, dtype=np.intc)
+            np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
+            patterns[dc_only] = (g[rows, cols], c[rows, cols], rows.astype(np.intc), indptr)
+        gv, cv, ind, ptr = patterns[dc_only]
+        a = sp.csc_array((gv + sk * cv, ind, ptr), shape=(n, n))
         try:
-            lu = spla.splu((gs + sk * cs).astype(complex).tocsc())
+            lu = spla.splu(a)
         except RuntimeError:
             raise _singular(f"at {sk.imag / 2 / np.pi:.6g} Hz") from None
-        xk = lu.solve(b.astype(complex))
+        xk = lu.solve(bc)
         h[k] = cout.T @ xk
         if x is not None and lam is not None:
             x[k] = xk
-            lam[k] = lu.solve(cout.astype(complex), trans="T")
+            lam[k] = lu.solve(cc, trans="T")
     return Solution(h, x, lam, "sparse")
 
 

@@ -115,7 +115,8 @@ class Port:
 
 
 def _check_name(name: object, what: str) -> str:
-    if not isinstance(name, str) or not name or any(ch.isspace() for ch in name):
+    # name.split() == [name]: non-empty and no white space (str.isspace characters)
+    if not isinstance(name, str) or name.split() != [name]:
         raise CircuitError(f"{what} name {name!r} is not valid: expected a non-empty string "
                            "without white space")
     return name

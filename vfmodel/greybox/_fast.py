@@ -49,16 +49,18 @@ class PoleResidue:
     def __call__(self, freq_hz: ArrayLike) -> ArrC:
         s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
         out = np.empty((s.size, *self.d.shape), complex)
+        res = self.residues.reshape(self.poles.size, -1)          # (k, n_out n_in)
         step = 4096
         for a in range(0, s.size, step):
             inv = 1.0 / (s[a:a + step, None] - self.poles[None, :])
-            out[a:a + step] = np.einsum("fk,koi->foi", inv, self.residues) + self.d[None]
+            out[a:a + step] = (inv @ res).reshape(-1, *self.d.shape) + self.d[None]
         return out
 
 
 def pole_residue(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, *,
                  f_check_hz: ArrayLike = (1e3, 1e5, 1e6, 1e7),
-                 f_inf_hz: float = 1e10, tol: float = _CHECK_TOL) -> PoleResidue | None:
+                 f_inf_hz: float | tuple[float, ...] = 1e10,
+                 tol: float = _CHECK_TOL) -> PoleResidue | None:
     """Pole-residue form of ``Cout^T (G + sC)^-1 B`` or None when it fails the check.
 
     Parameters
@@ -70,7 +72,8 @@ def pole_residue(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, *,
         Element values.
     f_check_hz : frequencies where the form is compared with direct solves; the relative
         error (Frobenius, relative to the largest response norm) must stay below ``tol``.
-    f_inf_hz : frequency of the direct solve that fixes ``D``.
+    f_inf_hz : frequency of the direct solve that fixes ``D``; with several, each is tried
+        in turn (one eigendecomposition) and the first that passes the check is kept.
     """
     g, c = mna.matrices(values)
     # diagonal balancing (eigenvalues unchanged): rows and columns of mixed units
@@ -97,24 +100,51 @@ def pole_residue(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, *,
         return None
     rr = (dc[:, None] * cout).T @ v                                   # (n_out, k)
     res = rr.T[:, :, None] * lb[:, None, :]
-    # D from a direct solve far above the band
-    ref_inf = mna.solve(np.array([f_inf_hz]), b, cout, values, method="dense").h[0]
-    s_inf = 2j * np.pi * f_inf_hz
-    d = ref_inf - np.einsum("k,koi->oi", 1.0 / (s_inf - p), res)
-    pr = PoleResidue(p, res, d)
+    # D from a direct solve far above the band; the direct solves (one batch: each
+    # frequency is factorised on its own, as in separate calls) also give the check values
+    f_inf = np.atleast_1d(np.asarray(f_inf_hz, dtype=float))
     fc = np.asarray(f_check_hz, dtype=float)
-    ref = mna.solve(fc, b, cout, values, method="dense").h
-    err = np.linalg.norm(pr(fc) - ref, axis=(1, 2))
-    if not np.all(np.isfinite(err)) or np.max(err) > tol * np.max(np.linalg.norm(ref, axis=(1, 2))):
-        return None
-    return pr
+    direct = mna.solve(np.r_[f_inf[0], fc], b, cout, values, method="dense").h
+    ref = direct[1:]
+    for k, fi in enumerate(f_inf):
+        ref_inf = direct[0] if k == 0 else \
+            mna.solve(fi, b, cout, values, method="dense").h[0]
+        s_inf = 2j * np.pi * fi
+        d = ref_inf - np.einsum("k,koi->oi", 1.0 / (s_inf - p), res)
+        pr = PoleResidue(p, res, d)
+        err = np.linalg.norm(pr(fc) - ref, axis=(1, 2))
+        if np.all(np.isfinite(err)) and \
+                np.max(err) <= tol * np.max(np.linalg.norm(ref, axis=(1, 2))):
+            return pr
+    return None
+
+
+class TransferMemo:
+    """The last :func:`transfer_on` result of a term, keyed by the element values.
+
+    The least-squares solvers evaluate the residual at a point and then ask for the
+    Jacobian at the same point, whose evaluation needs the residual again: the second
+    network transfer is then taken from here (an exact repeat, same values). One entry;
+    a memo of a pure function, not state that changes results."""
+
+    def __init__(self) -> None:
+        self._key: bytes = b""
+        self._value: ArrC | None = None
+
+    def __call__(self, mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF,
+                 freq_hz: ArrF) -> ArrC:
+        key = np.ascontiguousarray(values, dtype=float).tobytes()
+        if self._value is None or key != self._key:
+            value = transfer_on(mna, b, cout, values, freq_hz)
+            value.setflags(write=False)        # shared with the next caller: read-only
+            self._value, self._key = value, key
+        return self._value
 
 
 def transfer_on(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, freq_hz: ArrF) -> ArrC:
     """``Cout^T (G + sC)^-1 B`` on ``freq_hz``: pole-residue form (``D`` fixed at 10 GHz,
     else at 1 GHz or 100 GHz), direct solves if every attempt fails the check."""
-    for f_inf in (1e10, 1e9, 1e11):
-        pr = pole_residue(mna, b, cout, values, f_inf_hz=f_inf)
-        if pr is not None:
-            return pr(freq_hz)
+    pr = pole_residue(mna, b, cout, values, f_inf_hz=(1e10, 1e9, 1e11))
+    if pr is not None:
+        return pr(freq_hz)
     return mna.solve(freq_hz, b, cout, values, method="dense").h

@@ -24,7 +24,7 @@ in ``x`` (each costs one pole-residue evaluation of the network, :mod:`._fast`).
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -36,7 +36,7 @@ from vfmodel.circuit.mna import MnaSystem
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
-from vfmodel.greybox._fast import transfer_on
+from vfmodel.greybox._fast import TransferMemo
 from vfmodel.greybox._h1op import H1Operator, h1_operator
 from vfmodel.greybox._network import NetSpec
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
@@ -60,8 +60,12 @@ _J_DENSE_HZ = 50e3     # condition-2 Jacobian: every record bin up to here, then
 
 def values_of(params: ParamSet, spec: NetSpec, state: BearingState,
               sources: bool = False) -> ArrF:
-    """Element values (in circuit parameter order) of the network for ``params``."""
-    return spec.build(params, state, sources).param_values
+    """Element values (in circuit parameter order) of the network for ``params``.
+
+    The terminal sources are not parameters (same values with and without them): the
+    network is built without them, which halves the netlist checks."""
+    del sources
+    return spec.build(params, state).param_values
 
 
 def dlogv_dlogp(params: ParamSet, names: Sequence[str], spec: NetSpec,
@@ -277,6 +281,8 @@ class BearingTerm:
     spec: NetSpec
     whiten: ArrC | None = None   # (n_fm, 3, 3) C^{-1/2} of "covariance" weighting, else None
     bias: ArrC | None = None     # (n_fm, 3, 3) input-noise bias I - G_nn G_xx^-1, else None
+    _memo: TransferMemo = field(default_factory=TransferMemo, init=False, repr=False,
+                                compare=False)
 
     @property
     def n_residuals(self) -> int:
@@ -294,9 +300,10 @@ class BearingTerm:
         return self.op.freq_hz[self.op.mask]
 
     def transfer_bins(self, params: ParamSet) -> ArrC:
-        """Network transfer (n_bins, 1, 3) on the record's FFT bins."""
+        """Network transfer (n_bins, 1, 3) on the record's FFT bins (the last one is kept:
+        the Jacobian at the point just evaluated reuses it)."""
         v = values_of(params, self.spec, self.state, sources=True)
-        return transfer_on(self.mna, self.b, self.cout, v, self.prep.bins_hz)
+        return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
 
     def output(self, params: ParamSet) -> ArrF:
         """Modelled bearing voltage (periodic steady state, filtered inputs)."""

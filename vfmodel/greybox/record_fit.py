@@ -46,7 +46,7 @@ autocorrelated time-series", J. R. Stat. Soc. Suppl. 8(1), 27-41, 1946.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft as sfft
@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState
 from vfmodel.circuit.mna import MnaSystem
-from vfmodel.greybox._fast import transfer_on
+from vfmodel.greybox._fast import TransferMemo
 from vfmodel.greybox._network import NetSpec
 from vfmodel.greybox._objective import (
     LogMap,
@@ -91,15 +91,18 @@ class RecordTerm:
     basis: ArrF           # (n_window, n_basis) orthonormal transient basis
     sigma: float          # noise std of one sample of y_meas
     taus: tuple[float, ...] = ()   # time constants of the transient basis (s)
+    _memo: TransferMemo = field(default_factory=TransferMemo, init=False, repr=False,
+                                compare=False)
 
     @property
     def n_residuals(self) -> int:
         return int(self.window.stop - self.window.start)
 
     def transfer_bins(self, params: ParamSet) -> ArrC:
-        """Network transfer (n_bins, 1, 3) on the record's FFT bins."""
+        """Network transfer (n_bins, 1, 3) on the record's FFT bins (the last one is kept:
+        the Jacobian at the point just evaluated reuses it)."""
         v = values_of(params, self.spec, self.state, sources=True)
-        return transfer_on(self.mna, self.b, self.cout, v, self.prep.bins_hz)
+        return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
 
     def output(self, params: ParamSet) -> ArrF:
         """Modelled bearing voltage at the full rate (periodic response, filtered inputs)."""
