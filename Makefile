@@ -9,7 +9,7 @@ PY     := $(VENV)/bin/python
 PIP    := $(PY) -m pip
 DEMO_OUT ?= demo-out
 
-.PHONY: demo test test-slow lint typecheck pytest ngspice clean
+.PHONY: demo test test-slow lint typecheck pytest ngspice chromium clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,17 @@ ngspice:
 	  fi; }
 	@ngspice --version | head -n 2 | tail -n 1
 
+# the browser test of the HTML reports drives headless Chromium (Debian: chromium)
+chromium:
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = "0" ]; then \
+	    echo "chromium missing: installing the Debian package"; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium) >/dev/null; \
+	  else \
+	    echo "chromium is needed by the tests: install it, e.g. 'sudo apt-get install chromium'"; exit 1; \
+	  fi; }
+	@chromium --version
+
 demo: $(VENV)/.installed
 	$(PY) scripts/demo.py --out $(DEMO_OUT)
 
@@ -42,7 +53,7 @@ lint: $(VENV)/.installed-test
 typecheck: $(VENV)/.installed-test
 	$(VENV)/bin/mypy
 
-pytest: $(VENV)/.installed-test ngspice
+pytest: $(VENV)/.installed-test ngspice chromium
 	$(VENV)/bin/pytest -q -n 2 -m "not slow" --durations=15
 
 # long acceptance runs (minutes each); not part of `make test`

@@ -170,12 +170,13 @@ def test_second_fit_without_plot_removes_the_old_figure(
     res = run_cli(capsys, _fit_argv(spectrum, out, "--no-plot"))
     assert res.code == 0, res.err
     assert sorted(p.name for p in out.iterdir()) == [".vfmodel-outputs", "model.json",
-                                                      "notes.txt"]
+                                                      "notes.txt", "report.html"]
     assert json.loads((out / "model.json").read_text())["kind"] == "Z"
     res = run_cli(capsys, _fit_argv(spectrum, out))
     assert res.code == 0, res.err
     assert (out / "fit.png").read_bytes()[:4] == b"\x89PNG"
-    assert (out / ".vfmodel-outputs").read_text().split() == ["fit.png", "model.json"]
+    assert (out / ".vfmodel-outputs").read_text().split() == ["fit.png", "model.json",
+                                                              "report.html"]
 
 
 FAILURES = {

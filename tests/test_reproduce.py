@@ -69,7 +69,9 @@ def test_outputs_and_contract_keys(run: tuple[Path, Path, dict[str, Any]]) -> No
     for f in ("report.html", "network_0rpm.cir", "network_200rpm.cir",
               "fig19_impedance_cm.png", "fig20_22_bearing_200rpm.png", "fig23_lubricant.png"):
         assert (out / f).stat().st_size > 200, f
-    assert "<img src='fig19_impedance_cm.png'" in (out / "report.html").read_text()
+    page = (out / "report.html").read_text()   # self-contained: figures embedded
+    assert "<img src='data:image/png;base64," in page
+    assert "data-name='fig19_impedance_cm.png'" in page
 
 
 def test_numbers_against_the_bench(run: tuple[Path, Path, dict[str, Any]]) -> None:

@@ -12,7 +12,7 @@ from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
 
-FIT_OUTPUTS = ("model.json", "fit.png")
+FIT_OUTPUTS = ("model.json", "fit.png", "report.html")
 """Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""
 
 
@@ -89,7 +89,7 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
         subckt_name: str, no_plot: bool, out_dir: Path, quiet: bool) -> None:
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
     model with common poles; several files make a block-diagonal model. Writes
-    DIR/model.json (CONTRACT section 4) and DIR/fit.png.
+    DIR/model.json (CONTRACT section 4), DIR/fit.png and DIR/report.html.
 
     Also reported: the per-point relative error (RMS and max over frequency of
     ||H_model - H|| / ||H||) and, for square Z/Y/S data, the data's own passivity
@@ -155,6 +155,10 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
         from vfmodel.report.fit_figures import plot_fit
 
         plot_fit(res.data, res.model, stage / "fit.png")
+    from vfmodel.cli._common import finite_json
+    from vfmodel.report.fit_html import write_fit_html
+
+    write_fit_html(stage / "report.html", finite_json(obj), [] if no_plot else ["fit.png"])
     status = "not checked" if res.passivity is None else (
         "passive (certified)" if res.passivity.passive else
         f"NOT passive ({len(res.passivity.bands_hz)} violation bands)")

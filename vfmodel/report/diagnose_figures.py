@@ -1,18 +1,17 @@
-"""Figures and ``report.html`` of ``vfmodel diagnose``: normalised residuals with the
-located bands shaded, before/after overlays of every spectrum, and the pole map."""
+"""Figures of ``vfmodel diagnose``: normalised residuals with the located bands shaded,
+before/after overlays of every spectrum, and the pole map (``report.html``:
+:mod:`vfmodel.report.diagnose_html`, re-exported here)."""
 
 from __future__ import annotations
 
-import html
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from vfmodel.core.atomic import atomic_write_text
 from vfmodel.detective.diagnose import Diagnosis, residual_by_channel
 from vfmodel.detective.problem import Family
 from vfmodel.report._mpl import pyplot, save
+from vfmodel.report.diagnose_html import write_diagnose_html
 
 __all__ = ["write_diagnose_figures", "write_diagnose_html"]
 
@@ -135,59 +134,3 @@ def _waveform_figures(family: Family, d: Diagnosis, out: Path) -> list[str]:
         save(fig, out / name)
         names.append(name)
     return names
-
-
-def _fmt(x: Any) -> str:
-    if isinstance(x, float):
-        return f"{x:.4g}"
-    return html.escape(str(x))
-
-
-def write_diagnose_html(path: Path, doc: dict[str, Any], figures: list[str]) -> None:
-    """``report.html``: the sentence, mismatches, findings, rejected candidates, figures."""
-    e = html.escape
-    rows = "".join(f"<tr><td>{e(m['where'])}</td><td>{m['band_hz'][0]:.4g} - "
-                   f"{m['band_hz'][1]:.4g}</td><td>{m['significance']:.1f}</td>"
-                   f"<td>{e(m['statistic'])}</td></tr>" for m in doc["mismatches"])
-    finds = "".join(
-        f"<tr><td>{e(f['effect'])}</td><td>{e(f['location'])}</td>"
-        f"<td>{f['before']['chi2_red']:.3f} &rarr; {f['after']['chi2_red']:.3f}</td>"
-        f"<td>{_fmt(f['before']['impedance_mape_pct'])} &rarr; "
-        f"{_fmt(f['after']['impedance_mape_pct'])}</td><td>"
-        f"{_fmt(f['before']['bearing_rel_err_pct'])} &rarr; "
-        f"{_fmt(f['after']['bearing_rel_err_pct'])}</td><td>{f['delta_bic']:.1f}</td>"
-        f"<td>{e(f['explanation'])} {e(f['note'])}</td></tr>" for f in doc["findings"])
-    rej = "".join(f"<tr><td>{e(r['effect'])}</td><td>{e(r['location'])}</td>"
-                  f"<td>{e(r['reason'])}</td></tr>" for r in doc["rejected"])
-    tw = doc.get("time_windows", {})
-    twrows = "".join(f"<tr><td>{e(w['where'])}</td><td>{w['t_s'][0] * 1e6:.2f} - "
-                     f"{w['t_s'][1] * 1e6:.2f}</td><td>{w['significance']:.1f}</td>"
-                     f"<td>{w['rms_ratio']:.2f}</td></tr>" for w in tw.get("start", [])[:20])
-    twtab = ("<h2>Bearing-voltage time windows beyond the noise (starting network)</h2>"
-             "<table><tr><th>record</th><th>t (us)</th><th>significance (z)</th>"
-             f"<th>RMS / noise RMS</th></tr>{twrows}</table>") if twrows else ""
-    imgs = "".join(f'<figure><img src="{e(n)}" style="max-width:100%"><figcaption>{e(n)}'
-                   "</figcaption></figure>" for n in figures)
-    text = f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>vfmodel diagnose</title>
-<style>body{{font-family:sans-serif;max-width:1000px;margin:auto}}
-table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:90%}}
-</style></head><body>
-<h1>Discrepancy detective: {e(str(doc.get('model', '')))}</h1>
-<p><b>{e(doc['sentence'])}</b></p>
-<p>Starting network: chi2_red = {doc['start']['chi2_red']:.3f}; final: chi2_red =
-{doc['final']['chi2_red']:.3f}. Mismatch found: {doc['mismatch_found']}.</p>
-<h2>Where the starting network disagrees beyond the noise</h2>
-<table><tr><th>where</th><th>band (Hz)</th><th>significance (z)</th><th>test</th></tr>
-{rows}</table>
-<h2>Findings</h2>
-<table><tr><th>effect</th><th>location</th><th>chi2_red</th><th>MAPE %</th>
-<th>u_B peak error %</th>
-<th>Delta BIC</th><th>physics</th></tr>{finds}</table>
-{twtab}
-<h2>Rejected candidates</h2>
-<table><tr><th>effect</th><th>location</th><th>reason</th></tr>{rej}</table>
-<h2>Figures</h2>{imgs}
-</body></html>
-"""
-    atomic_write_text(path, text)

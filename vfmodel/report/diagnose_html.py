@@ -1,0 +1,184 @@
+"""``report.html`` of ``vfmodel diagnose``: one self-contained page (figures embedded).
+
+Summary first: the detective's sentence, the starting and final reduced chi-square, whether
+a mismatch beyond the noise is left (the goal: none), what to look at; then where the
+starting network disagrees, the findings with their parameters (95 % intervals), the time
+windows, the rejected candidates and the figures. Numbers come from ``diagnosis.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from vfmodel.core.atomic import atomic_write_text
+from vfmodel.report.html import UNDETERMINED_STD_LOG, WEAK_STD_LOG, unit_of
+from vfmodel.report.page import Check, E, figure, html_page, num, summary, table
+
+__all__ = ["diagnose_html", "write_diagnose_html"]
+
+
+def _arrow(doc: dict[str, Any], key: str, unit: str) -> str:
+    a, b = doc.get("start", {}).get(key), doc.get("final", {}).get(key)
+    if a is None and b is None:
+        return "–"
+    return f"{num(a, unit, ['start', key])} → {num(b, unit, ['final', key])}"
+
+
+def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
+    remaining = doc.get("remaining_mismatches", [])
+    checks = [
+        Check("mismatch beyond the noise (starting network)",
+              f"{len(doc.get('mismatches', []))} band(s)" if doc.get("mismatch_found")
+              else "none", "–", "–", None),
+        Check("reduced χ², starting → final network", _arrow(doc, "chi2_red", ""),
+              "≈ 1 at the noise", "–", None),
+        Check("impedance MAPE, starting → final", _arrow(doc, "impedance_mape_pct", "%"),
+              "–", "–", None),
+        Check("bearing peak error, starting → final", _arrow(doc, "bearing_rel_err_pct", "%"),
+              "–", "–", None),
+        Check("effects added (findings)", str(len(doc.get("findings", []))), "–", "–", None),
+        Check("final network explains the data to the noise",
+              "yes" if not remaining else f"{len(remaining)} band(s) left", "–",
+              "no mismatch left", not remaining),
+    ]
+    look = []
+    for m in remaining[:6]:
+        look.append(f"Still beyond the noise: <b>{E(m['where'])}</b> "
+                    f"{num(m['band_hz'][0], 'Hz')} – {num(m['band_hz'][1], 'Hz')}.")
+    for f in doc.get("findings", []):
+        if not f.get("identifiable", True):
+            alt = ", ".join(f.get("alternatives", []))
+            look.append(f"<span class='flag'>⚠ {E(f['effect'])} at {E(f['location'])} is "
+                        "not identifiable from these data</span>"
+                        + (f" (also explained by {E(alt)})" if alt else "") + ".")
+        loose = [n for n, s in (f.get("rel_std") or {}).items()
+                 if s is None or s > UNDETERMINED_STD_LOG]
+        if loose:
+            look.append(f"Parameters of {E(f['effect'])} not determined by the data: "
+                        f"{E(', '.join(loose))}.")
+    if doc.get("findings"):
+        look.append("Compare the before/after overlays and residuals of the channels "
+                    "with a mismatch (shaded bands).")
+    elif doc.get("mismatch_found"):
+        look.append("A mismatch was found but no candidate effect explains it: see the "
+                    "rejected candidates and the residual figures.")
+    return checks, look
+
+
+def _flag(s: float | None) -> str:
+    if s is None or not math.isfinite(s) or s > UNDETERMINED_STD_LOG:
+        return "<span class='flag'>⚠ not determined by the data</span>"
+    return "<span class='weak'>weakly determined</span>" if s > WEAK_STD_LOG else ""
+
+
+def _findings(doc: dict[str, Any]) -> str:
+    rows, prow = [], []
+    for i, f in enumerate(doc.get("findings", [])):
+        key = ["findings", str(i)]
+        b, a = f["before"], f["after"]
+        rows.append((
+            E(f["effect"]), E(f["location"]),
+            f"{num(b['chi2_red'], '', [*key, 'before', 'chi2_red'])} → "
+            f"{num(a['chi2_red'], '', [*key, 'after', 'chi2_red'])}",
+            f"{num(b.get('impedance_mape_pct'), '%', [*key, 'before', 'impedance_mape_pct'])}"
+            f" → {num(a.get('impedance_mape_pct'), '%', [*key, 'after', 'impedance_mape_pct'])}",
+            f"{num(b.get('bearing_rel_err_pct'), '%', [*key, 'before', 'bearing_rel_err_pct'])}"
+            f" → {num(a.get('bearing_rel_err_pct'), '%', [*key, 'after', 'bearing_rel_err_pct'])}",
+            num(f.get("delta_bic"), "", [*key, "delta_bic"]),
+            "yes" if f.get("identifiable", True) else "<span class='flag'>no</span>",
+            f"<span class='text'>{E(f.get('explanation', ''))} {E(f.get('note', ''))}</span>"))
+        for n, v in (f.get("params") or {}).items():
+            u = unit_of(n)
+            s = (f.get("rel_std") or {}).get(n)
+            iv = ("unbounded" if s is None or not math.isfinite(s) else
+                  f"{num(v * math.exp(-1.959964 * s), u)} … "
+                  f"{num(v * math.exp(1.959964 * s), u)}")
+            prow.append((E(n), num(v, u, [*key, "params", n]), iv, _flag(s)))
+    if not rows:
+        return "<h2 id='findings'>Findings</h2><p>No effect was added.</p>"
+    return ("<h2 id='findings'>Findings</h2>"
+            + table(["effect", "location", "reduced χ²", "impedance MAPE",
+                     "u<sub>B</sub> peak error", "Δ BIC", "identifiable", "physics"], rows)
+            + ("<h3>Parameters of the added effects (95 % intervals)</h3>"
+               + table(["parameter", "value", "95 % interval", ""], prow) if prow else ""))
+
+
+def _mismatches(doc: dict[str, Any]) -> str:
+    rows = [(E(m["where"]),
+             f"{num(m['band_hz'][0], 'Hz', ['mismatches', str(i), 'band_hz', '0'])} – "
+             f"{num(m['band_hz'][1], 'Hz', ['mismatches', str(i), 'band_hz', '1'])}",
+             num(m["significance"], "", ["mismatches", str(i), "significance"], 3),
+             E(str(m.get("statistic", ""))))
+            for i, m in enumerate(doc.get("mismatches", []))]
+    text = ("<h2 id='mismatches'>Where the starting network disagrees beyond the noise</h2>")
+    if not rows:
+        return text + "<p>Nowhere: the starting network explains the data.</p>"
+    return text + table(["where", "band", "significance (z)", "test"], rows)
+
+
+def _windows(doc: dict[str, Any]) -> str:
+    tw = doc.get("time_windows", {}).get("start", [])[:20]
+    if not tw:
+        return ""
+    rows = [(E(w["where"]), f"{num(w['t_s'][0], 's')} – {num(w['t_s'][1], 's')}",
+             num(w["significance"], "", digits=3), num(w["rms_ratio"], "", digits=3))
+            for w in tw]
+    return ("<h2>Bearing-voltage time windows beyond the noise (starting network)</h2>"
+            + table(["record", "time", "significance (z)", "RMS / noise RMS"], rows))
+
+
+def _rejected(doc: dict[str, Any]) -> str:
+    rows = [(E(r["effect"]), E(r["location"]), f"<span class='text'>{E(r['reason'])}</span>")
+            for r in doc.get("rejected", [])]
+    if not rows:
+        return ""
+    return "<h2>Rejected candidates</h2>" + table(["effect", "location", "reason"], rows)
+
+
+def _identifiability(doc: dict[str, Any]) -> str:
+    ident = doc.get("identifiability")
+    recs = doc.get("recommendations")
+    out = []
+    if ident:
+        rows = [(E(k), E(v)) for k, v in ident.get("effects", {}).items()]
+        if rows:
+            out += ["<h2>Identifiability of the effects</h2>",
+                    table(["effect", "from these data"], rows)]
+    if recs:
+        rrows = [(E(r["measurement"]), num(r.get("speed_rpm"), "rpm"),
+                 E(", ".join(r.get("separates", []))),
+                 num(r.get("expected_delta_chi2"), "", ["recommendations", str(i),
+                                                       "expected_delta_chi2"]))
+                for i, r in enumerate(recs)]
+        out += ["<h2>Recommended measurements</h2>",
+                table(["measurement", "speed", "separates", "expected Δχ²"], rrows)]
+    return "".join(out)
+
+
+def diagnose_html(doc: dict[str, Any], figures: Sequence[str],
+                  fig_dir: Path | None = None) -> str:
+    """HTML text of the report; the PNG ``figures`` (names in ``fig_dir``) are embedded."""
+    checks, look = _checks(doc)
+    where = [m["where"] for m in doc.get("mismatches", [])]
+    safe = ["".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in w) for w in where]
+    overlays = [f for f in figures if f.startswith("overlay_")]
+    key_name = next((f"residual_{s}.png" for s in safe if f"residual_{s}.png" in figures),
+                    overlays[0] if overlays else (figures[0] if figures else ""))
+    key_fig = figure(fig_dir, key_name, f"{key_name}: residuals in units of the noise, "
+                     "starting network (top) and after the detective (bottom); shaded: "
+                     "mismatch beyond the noise (click to zoom)") if key_name else ""
+    head = summary(f"Discrepancy detective: {doc.get('model', '')}",
+                   f"<b>{E(str(doc.get('sentence', '')))}</b>", checks, look, key_fig,
+                   reference_name="reference")
+    body = [head, _mismatches(doc), _findings(doc), _windows(doc), _identifiability(doc),
+            _rejected(doc), "<h2>Figures</h2><div class='figs'>"
+            + "".join(figure(fig_dir, f) for f in figures if f != key_name) + "</div>"]
+    return html_page(f"vfmodel diagnose: {doc.get('model', '')}", body)
+
+
+def write_diagnose_html(path: Path, doc: dict[str, Any], figures: Sequence[str]) -> None:
+    """Write :func:`diagnose_html` atomically, embedding the figures found beside ``path``."""
+    atomic_write_text(path, diagnose_html(doc, figures, Path(path).parent))
