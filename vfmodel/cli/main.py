@@ -23,6 +23,7 @@ _COMMANDS = {
     "reproduce": "vfmodel.cli.cmd_reproduce",
     "diagnose": "vfmodel.cli.cmd_diagnose",
     "predict": "vfmodel.cli.cmd_predict",
+    "batch": "vfmodel.cli.cmd_batch",
 }
 
 
