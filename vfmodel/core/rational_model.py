@@ -273,6 +273,18 @@ class RationalModel:
         return StateSpace(a, b, c, self.dd.copy(), self.ee.copy())
 
     # ------------------------------------------------------------------ JSON
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import model_html
+
+        return model_html(self)
+
+    def plot(self, freq_hz: ArrayLike | None = None, ax: Any = None) -> Any:
+        """|H| of the entries (matplotlib imported now); returns the axes."""
+        from vfmodel.report.notebook import model_plot
+
+        return model_plot(self, freq_hz, ax)
+
     def to_json_dict(self) -> dict[str, Any]:
         """The model fields of CONTRACT section 4 (without fit statistics)."""
         return {

@@ -29,7 +29,7 @@ from __future__ import annotations
 import os
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -115,6 +115,18 @@ class PassivityReport:
     rel_rms_change: float = 0.0
     notes: tuple[str, ...] = ()
     min_margin: float | None = None
+
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import passivity_html
+
+        return passivity_html(self)
+
+    def plot(self, ax: Any = None) -> Any:
+        """Violation bands and crossings (matplotlib imported now); returns the axes."""
+        from vfmodel.report.notebook import passivity_plot
+
+        return passivity_plot(self, ax)
 
 
 # ---------------------------------------------------------------------- margins

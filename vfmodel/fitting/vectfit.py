@@ -96,6 +96,18 @@ class FitReport:
     point_rel_max_error: float = 0.0
     notes: tuple[str, ...] = ()
 
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import fit_report_html
+
+        return fit_report_html(self)
+
+    def plot(self, ax: Any = None) -> Any:
+        """Error of every pole-relocation iteration (matplotlib imported now); the axes."""
+        from vfmodel.report.notebook import fit_report_plot
+
+        return fit_report_plot(self, ax)
+
 
 # ---------------------------------------------------------------------- input handling
 def _as_frequency_data(data: Any, kind: Kind | None) -> FrequencyData:

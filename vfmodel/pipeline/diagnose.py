@@ -35,6 +35,18 @@ class DiagnoseResult:
     diagnosis: Diagnosis
     document: dict[str, Any]
 
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import diagnose_html
+
+        return diagnose_html(self)
+
+    def plot(self, channel: int | None = None, ax: Any = None) -> Any:
+        """Measured vs starting and final network of a channel; returns the axes."""
+        from vfmodel.report.notebook import diagnose_plot
+
+        return diagnose_plot(self, channel, ax)
+
 
 def _f(x: float) -> float | None:
     return float(x) if np.isfinite(x) else None

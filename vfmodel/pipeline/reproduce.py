@@ -94,6 +94,18 @@ class ReproduceResult:
     blackbox: BlackBoxComparison | None
     netlists: dict[str, str]
 
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import reproduce_html
+
+        return reproduce_html(self)
+
+    def plot(self, speed_rpm: float | None = None, ax: Any = None) -> Any:
+        """Measured, grey-box and BVR bearing voltage of a speed; returns the axes."""
+        from vfmodel.report.notebook import reproduce_plot
+
+        return reproduce_plot(self, speed_rpm, ax)
+
 
 def netlist_text(ident: Identification, speed_rpm: float) -> str:
     """Flat ngspice netlist of the identified network at ``speed_rpm`` (no sources)."""
