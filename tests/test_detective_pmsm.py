@@ -57,6 +57,10 @@ def null() -> DiagnoseResult:
     return _run(FAST_NULL)
 
 
+# a full-size diagnose (minutes): `make test-slow`. `make test` keeps the small-problem
+# proof that a concealed effect is found and placed (tests/test_detective_rc.py) and the
+# PMSM family end to end on the null case below.
+@pytest.mark.slow
 def test_concealed_case_found_at_the_right_place(concealed: DiagnoseResult) -> None:
     _check_case(FAST_CONCEALED, concealed.document)
     # the report names the physics of the finding
