@@ -71,12 +71,14 @@ def reproduce_results() -> dict[str, Any]:
               "winding.U.C_wf": 1.2187880e-09, "insulation.R_ins": 28700735.5,
               "insulation.k_d": 0.070050396, "insulation.tau_d": 1.5519633e-06,
               "insulation.C_wr": 1.8862966e-10, "airgap.C_rf": 1.0544427e-09,
-              "shaft.R_dc": 0.0010081887, "bearing.R_h": 0.5, "lubricant.R_1": 50000.0,
+              "shaft.R_dc": 0.0010081887, "winding.skin_rho": 1.6119840, "bearing.R_h": 0.5,
+              "lubricant.R_1": 50000.0,
               "lubricant.C_1": 2e-08, "fixture.L": 5e-08}
     rel = {"winding.U.R_w": 0.17966, "winding.U.L_w": 0.0037586, "winding.U.C_wf": 0.24165,
            "insulation.R_ins": 0.32178, "insulation.k_d": 0.013172,
            "insulation.tau_d": 0.027191, "insulation.C_wr": 1.5612481,
-           "airgap.C_rf": 3.6328970, "shaft.R_dc": 2.7372023}
+           "airgap.C_rf": 3.6328970, "shaft.R_dc": 2.7372023,
+           "winding.skin_rho": 1.2e4}                  # exp(1.96 * 1.2e4) overflows
     return {
         "dataset": "pmsm40kw-bench-paper-seed0", "impedance": imp, "bearing": bea,
         "baseline_bvr": base, "greybox_beats_baseline": beats,

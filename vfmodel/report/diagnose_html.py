@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from vfmodel.core.atomic import atomic_write_text
-from vfmodel.report.html import UNDETERMINED_STD_LOG, WEAK_STD_LOG, unit_of
+from vfmodel.report.html import MAX_STD_LOG, UNDETERMINED_STD_LOG, WEAK_STD_LOG, unit_of
 from vfmodel.report.page import Check, E, figure, html_page, num, summary, table
 
 __all__ = ["diagnose_html", "write_diagnose_html"]
@@ -93,7 +93,7 @@ def _findings(doc: dict[str, Any]) -> str:
         for n, v in (f.get("params") or {}).items():
             u = unit_of(n)
             s = (f.get("rel_std") or {}).get(n)
-            iv = ("unbounded" if s is None or not math.isfinite(s) else
+            iv = ("unbounded" if s is None or not math.isfinite(s) or s > MAX_STD_LOG else
                   f"{num(v * math.exp(-1.959964 * s), u)} … "
                   f"{num(v * math.exp(1.959964 * s), u)}")
             prow.append((E(n), num(v, u, [*key, "params", n]), iv, _flag(s)))

@@ -53,6 +53,10 @@ UNDETERMINED_STD_LOG = 1.0
 WEAK_STD_LOG = 0.35
 """... and above which it is "weakly determined" (more than a factor 2 either way)."""
 
+MAX_STD_LOG = 100.0
+"""Beyond this standard deviation of log p an interval is written as unbounded (exp would
+overflow; such a value is not determined at all)."""
+
 _STATUS = {-1: "improper input", 0: "evaluation limit", 1: "gradient small",
            2: "cost change small", 3: "step small", 4: "cost and step small"}
 
@@ -326,7 +330,7 @@ def _identification(r: dict[str, Any]) -> str:
         if n not in rel:
             rows.append((E(n), num(val, u, ["model", "params", n]), "fixed (not fitted)", ""))
             continue
-        if s is None or not math.isfinite(s):
+        if s is None or not math.isfinite(s) or s > MAX_STD_LOG:
             rows.append((E(n), num(val, u, ["model", "params", n]), "unbounded", _flag(None)))
             continue
         lo, hi = val * math.exp(-1.959964 * s), val * math.exp(1.959964 * s)
