@@ -24,7 +24,7 @@ FILES = [ROOT / "data" / "vfbench" / "cpw.s2p",
 def cluster() -> Any:
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as c, distributed.Client(c) as cl:
+                                  dashboard_address=":0") as c, distributed.Client(c) as cl:
         yield cl
 
 
