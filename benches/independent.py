@@ -358,6 +358,13 @@ def _emi(d: Draw, n: int, rng: np.random.Generator) -> ArrF:
     return w / np.sqrt(np.mean(w**2))
 
 
+def bearing_capacitance(d: Draw, speed: float, size: float, freq_hz: float = 100e3) -> float:
+    """``Im(Y) / (2 pi f)`` of one bearing of the bench between shaft and frame."""
+    z = Circuit(elements=tuple(_bearing("b", "S", "0", d, speed, size))).port_impedance(
+        [freq_hz], [("S", "0")])[0, 0, 0]
+    return float((1.0 / z).imag / (2 * np.pi * freq_hz))
+
+
 def equivalents(d: Draw, speed: float) -> dict[str, float]:
     """Truth quantities comparable with the grey-box model's parameters.
 
@@ -365,8 +372,9 @@ def equivalents(d: Draw, speed: float) -> dict[str, float]:
     the bare capacitances) and at 1 kHz (with both loss branches); ``film_c_f``: the
     high-frequency capacitance of one bearing's films (inner and outer contact in series,
     each contact oil and thickener in series), averaged over the two bearings (the model's
-    bearings are identical); ``film_r_ohm``: twice the DC resistance of the two bearings'
-    films in parallel (the model's per-bearing equivalent).
+    bearings are identical); ``c_b_100khz_f``: the effective capacitance of a bearing at
+    100 kHz (network admittance, mean of the two bearings); ``film_r_ohm``: twice the DC
+    resistance of the two bearings' films in parallel (the model's per-bearing equivalent).
     """
     v = d.v
     kd = 1 + v["k1"] + v["k2"]
@@ -386,6 +394,8 @@ def equivalents(d: Draw, speed: float) -> dict[str, float]:
                   for x, a in ((ci, v["area_in"]), (co, v["area_out"]))]
             cbs.append(1 / (1 / ce[0] + 1 / ce[1]) + v["C_air"] * size)
         out["film_c_f"] = float(np.mean(cs))
+        out["c_b_100khz_f"] = float(np.mean([bearing_capacitance(d, speed, size)
+                                             for size in (1.0, v["de_size"])]))
         out["film_r_ohm"] = float(2 / sum(gs))
         out["c_b_f"] = float(np.mean(cbs))
     return out

@@ -112,3 +112,30 @@ def test_fit_recovers_film_and_interval_covers_truth(record: Recording) -> None:
     # the film capacitance is determined to better than 2 % (1-sigma) by a 1-ms record
     assert c_b["std_log"] is not None and c_b["std_log"] < 0.02
     assert abs(np.log(c_b["value"] / truth_cb)) < 0.02
+
+
+def test_speed_copy_maps_shared_and_per_speed_columns(record: Recording) -> None:
+    # joint stage (greybox.joint): the extended set holds lubricant copies per speed; a
+    # speed's term depends on the shared names and its own copies only
+    from vfmodel.greybox.joint import SpeedCopy, extend
+
+    prep = prepare_recording(record)
+    spec = NetSpec()
+    local = ("lubricant.C_1",)
+    ext = extend(TRUTH, local, {300.0: TRUTH, 400.0: TRUTH.with_values(
+        {"lubricant.C_1": 9e-9})})
+    wrapped = SpeedCopy(record_term(prep, spec, TRUTH, "rotating"), TRUTH.names, local, 300.0)
+    names = ["insulation.C_wr", "lubricant.C_1@300", "lubricant.C_1@400"]
+    r, jm = wrapped.residual(ext, names, jac=True)
+    assert jm is not None
+    direct, _ = record_term(prep, spec, TRUTH, "rotating").residual(TRUTH)
+    np.testing.assert_allclose(r, direct, rtol=1e-10, atol=1e-10)
+    assert np.all(jm[:, 2] == 0.0)                       # another speed's copy
+    x0 = ext.to_log(names[:2])
+    for j in range(2):
+        xp, xm = x0.copy(), x0.copy()
+        xp[j] += 1e-4
+        xm[j] -= 1e-4
+        fd = (wrapped.residual(ext.from_log(xp, names[:2]))[0]
+              - wrapped.residual(ext.from_log(xm, names[:2]))[0]) / 2e-4
+        assert np.linalg.norm(jm[:, j] - fd) < 0.02 * np.linalg.norm(fd), names[j]

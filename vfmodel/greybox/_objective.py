@@ -358,23 +358,34 @@ class BearingTerm:
         fm = self.freq_hz
         grid = np.union1d(fb[fb <= _J_DENSE_HZ], fh[(fh >= fm[0]) & (fh <= fm[-1])][::2])
         grid = grid[grid > 0]
-        v = values_of(params, self.spec, self.state, sources=True)
-        _, dh = self.mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
-        dl = (lmap.at(params) if lmap is not None
-              else dlogv_dlogp(params, names, self.spec, self.state, sources=True))
-        dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v, dl)      # (n_p, 3, n_g)
-        # linear interpolation onto the record bins (DC: the lowest grid value)
-        fi = np.interp(fb, grid, np.arange(grid.size))
-        i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
-        i1 = np.clip(i0 + 1, 0, grid.size - 1)
-        w = fi - i0
-        dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
-        dyb = np.einsum("jif,if->jf", dfine, self.prep.x_bins)
-        dy = _resample(dyb, self.prep.n_samples, self.prep.n_h1)
+        dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
+                                grid, lmap)
         dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
         return r, np.ascontiguousarray(jm)
+
+
+def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
+                       prep: PreparedRecording, params: ParamSet, names: Sequence[str],
+                       grid: ArrF, lmap: LogMap | None = None) -> ArrF:
+    """``d y_model / d log p`` (n_names, n_h1): the bearing transfer's derivatives by the
+    adjoint method on ``grid`` (Hz), interpolated linearly onto every record bin (DC: the
+    lowest grid value), applied to the record's terminal spectra and resampled to the H1
+    rate (the periodic response of :func:`steady_output` is linear in the transfer)."""
+    v = values_of(params, spec, state, sources=True)
+    _, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
+    dl = (lmap.at(params) if lmap is not None
+          else dlogv_dlogp(params, names, spec, state, sources=True))
+    dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v, dl)      # (n_p, 3, n_g)
+    fb = prep.bins_hz
+    fi = np.interp(fb, grid, np.arange(grid.size))
+    i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
+    i1 = np.clip(i0 + 1, 0, grid.size - 1)
+    w = fi - i0
+    dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
+    dyb = np.einsum("jif,if->jf", dfine, prep.x_bins)
+    return _resample(dyb, prep.n_samples, prep.n_h1)
 
 
 def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,

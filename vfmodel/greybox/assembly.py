@@ -48,6 +48,7 @@ __all__ = [
     "PHASES",
     "SOURCES",
     "TOPOLOGY_PORTS",
+    "bearing_capacitance",
     "bearing_transfer",
     "build_network",
     "default_params",
@@ -302,3 +303,34 @@ def divider_capacitances(params: ParamSet | Mapping[str, float],
     c_b = film + v["bearing.C_air"] + (v["bearing.C_edge"]
                                        if "hertzian_edge_capacitance" in eff else 0.0)
     return {"c_wr": c_wr, "c_rf": c_rf, "c_b": c_b, "bvr": c_wr / (c_wr + c_rf + 2 * c_b)}
+
+
+BEARING_C_REF_HZ = 100e3
+"""Frequency of :func:`bearing_capacitance`: inside the plateau band (the capacitive
+divider after each edge), above the film's RC corner and below the ringing."""
+
+
+def bearing_capacitance(params: ParamSet | Mapping[str, float],
+                        effects: Iterable[str] = PAPER_EFFECTS,
+                        state: BearingState = "rotating",
+                        freq_hz: float = BEARING_C_REF_HZ) -> float:
+    """Effective capacitance ``Im(Y) / (2 pi f)`` of one bearing between shaft and frame at
+    ``freq_hz`` (film layers, contact, balls, edge and air capacitance together).
+
+    Unlike :func:`divider_capacitances` (``c_b``: capacitances added by hand) this is the
+    network's own admittance, so it is defined for any bearing structure (e.g. inner and
+    outer race contacts, a conducting thickener layer) and comparable between them.
+    """
+    eff = check_effects(effects)
+    v = _pget(params)
+    els = bearing(
+        "b", "S", "0", c_air=v["bearing.C_air"], ball_r=v["ball.R_dc"],
+        ball_l_ext=v["ball.L_ext"], ball_l_int=v["ball.L_int"], ball_rho=v["ball.rho"],
+        ball_skin="ball_skin_effect" in eff, r_h=v["bearing.R_h"], r_1=v["lubricant.R_1"],
+        c_1=v["lubricant.C_1"], two_layer="lubricant_two_layer" in eff, r_2=v["lubricant.R_2"],
+        c_2=v["lubricant.C_2"], lub_loss="lubricant_dielectric_loss" in eff,
+        k_d=v["lubricant.k_d"], tau_d=v["lubricant.tau_d"],
+        edge="hertzian_edge_capacitance" in eff, c_edge=v["bearing.C_edge"],
+        metallic="metallic_contact" in eff, closed=state == "standstill")
+    z = Circuit(elements=tuple(els)).port_impedance([freq_hz], [("S", "0")])[0, 0, 0]
+    return float((1.0 / z).imag / (2 * np.pi * freq_hz))

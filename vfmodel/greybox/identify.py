@@ -74,12 +74,14 @@ from vfmodel.greybox._objective import (
 from vfmodel.greybox.assembly import default_params, divider_capacitances
 from vfmodel.greybox.bvr_baseline import average_bvr, common_mode
 from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.joint import SHARED, SpeedCopy, extend, speed_params, tag
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
     "STANDSTILL_HIDDEN",
     "Identification",
+    "RotatingFit",
     "SpeedFit",
     "StageReport",
     "bearing_state",
@@ -304,8 +306,9 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     # terms' variance-inflation factor (effective number of independent samples)
     infl = 1.0
     for term, _ in terms:
-        if isinstance(term, RecordTerm):
-            infl = max(infl, term.correlation_factor(p_out))
+        cf = getattr(term, "correlation_factor", None)
+        if callable(cf):
+            infl = max(infl, float(cf(p_out)))
     cov = _cov_log(jm, chi2 * infl)
     rel = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return p_out, StageReport(
@@ -364,7 +367,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              standstill_weighting: H1Weighting = "covariance",
              input_noise: bool = True,
              hold_standstill: Sequence[str] = STANDSTILL_HIDDEN,
-             rotating_fit: RotatingFit = "record") -> Identification:
+             rotating_fit: RotatingFit = "record", joint: bool = True,
+             max_nfev_joint: int = 25) -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -497,6 +501,53 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         stages.append(rep)
         fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep, rterm))
         cur = fit_p
+    rot = [f for f in fits if f.record is not None]
+    if joint and rot:
+        # shared rotor-side capacitances refitted with every record (greybox.joint)
+        shared = [n for n in SHARED if n in p.names]
+        ext = extend(p, lub, {f.speed_rpm: f.params for f in rot})
+        base = p.names
+        # each term weighted by its misfit at the end of its own stage (reduced chi-square,
+        # times the variance inflation of correlated waveform residuals): the model error
+        # is treated as noise, so 24k-sample records cannot outvote the spectra
+        def wgt(name: str, default: float = 1.0) -> float:
+            rep = next((st for st in reversed(stages) if st.name.startswith(name)), None)
+            if rep is None:
+                return default
+            return default / float(np.sqrt(max(rep.chi2_red, 1.0) * rep.corr_factor))
+
+        jterms: list[tuple[Term, float]] = []
+        if imp is not None:
+            jterms.append((SpeedCopy(imp_fit, base, (), None),  # type: ignore[arg-type]
+                           wgt("impedance")))
+        if stand:
+            jterms.append((SpeedCopy(fits[0].term, base, (), None),  # type: ignore[arg-type]
+                           wgt("standstill", weight_bearing)))
+        jterms += [(SpeedCopy(f.record, base, lub, f.speed_rpm),  # type: ignore[misc]
+                    wgt(f"lubricant {f.speed_rpm:g} rpm")) for f in rot]
+        jnames = shared + [n + tag(f.speed_rpm) for f in rot for n in lub]
+        ext_fit, jrep = fit_stage(jterms, ext, jnames, "joint (all speeds)",
+                                  max_nfev=max_nfev_joint, prior_sigma=prior_sigma,
+                                  progress=progress)
+        stages.append(jrep)
+        p = ParamSet(tuple(ext_fit.spec(n) for n in base), tuple(ext_fit[n] for n in base))
+        idx = {n: i for i, n in enumerate(jnames)}
+        new_fits = [SpeedFit(f.speed_rpm, f.state, p, f.term, None) for f in fits
+                    if f.record is None]
+        for f in rot:
+            own = [n + tag(f.speed_rpm) for n in lub]
+            sel = [idx[n] for n in shared + own]
+            cov = None if jrep.cov_log is None else jrep.cov_log[np.ix_(sel, sel)]
+            names_b = tuple(shared) + lub
+            rep = StageReport(f"joint {f.speed_rpm:g} rpm", names_b, jrep.n_residuals,
+                              jrep.chi2_red, jrep.nfev, jrep.status,
+                              {n: float(np.sqrt(cov[k, k])) if cov is not None else 0.0
+                               for k, n in enumerate(names_b)}, cov, jrep.corr_factor)
+            new_fits.append(SpeedFit(f.speed_rpm, f.state,
+                                     speed_params(ext_fit, base, f.speed_rpm, lub),
+                                     f.term, rep, f.record))
+        fits = new_fits
+        rel = {**rel, **{n: jrep.rel_std[n] for n in shared}}
     fits.sort(key=lambda f: f.speed_rpm)
     if imp is not None and stand:
         imp = impedance_term(dataset.impedance, spec, p)
@@ -533,7 +584,9 @@ def log_interval(params: ParamSet, report: StageReport,
     q0 = float(quantity(params))
     if report.cov_log is None or q0 <= 0:
         return {"value": q0, "lo": None, "hi": None, "std_log": None}
-    names = report.names
+    # names of the report that ``params`` holds (a joint stage also has per-speed copies)
+    keep = [k for k, n in enumerate(report.names) if n in params]
+    names = tuple(report.names[k] for k in keep)
     x0 = params.to_log(names)
     g = np.zeros(len(names))
     for j in range(len(names)):
@@ -543,7 +596,7 @@ def log_interval(params: ParamSet, report: StageReport,
         qp = quantity(params.from_log(xp, names))
         qm = quantity(params.from_log(xm, names))
         g[j] = (np.log(qp) - np.log(qm)) / 2e-4 if qp > 0 and qm > 0 else 0.0
-    cov = report.cov_log
+    cov = report.cov_log[np.ix_(keep, keep)]
     used = np.abs(g) > 1e-9
     if not np.all(np.isfinite(cov[np.ix_(used, used)])):
         return {"value": q0, "lo": None, "hi": None, "std_log": None}

@@ -60,7 +60,7 @@ from vfmodel.greybox._objective import (
     LogMap,
     PreparedRecording,
     _resample,
-    dlogv_dlogp,
+    output_derivatives,
     steady_output,
     values_of,
 )
@@ -130,18 +130,8 @@ class RecordTerm:
         hi = fb[-1]
         grid = np.union1d(fb[(fb > 0) & (fb <= _J_DENSE_HZ)],
                           np.geomspace(_J_DENSE_HZ, hi, _J_LOG_POINTS))
-        v = values_of(params, self.spec, self.state, sources=True)
-        _, dh = self.mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
-        dl = (lmap.at(params) if lmap is not None
-              else dlogv_dlogp(params, names, self.spec, self.state, sources=True))
-        dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v, dl)      # (n_p, 3, n_g)
-        fi = np.interp(fb, grid, np.arange(grid.size))
-        i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
-        i1 = np.clip(i0 + 1, 0, grid.size - 1)
-        w = fi - i0
-        dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
-        dyb = np.einsum("jif,if->jf", dfine, self.prep.x_bins)
-        dy = _resample(dyb, self.prep.n_samples, self.prep.n_h1)[:, self.window]
+        dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
+                                grid, lmap)[:, self.window]
         jm = self._project(dy) / self.sigma
         return r, np.ascontiguousarray(jm.T)
 

@@ -32,12 +32,13 @@ from vfmodel.circuit.spice_export import to_spice
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
-from vfmodel.greybox.assembly import divider_capacitances
+from vfmodel.greybox.assembly import bearing_capacitance, divider_capacitances
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.bvr_baseline import BvrBaseline, bvr_baseline, predict_bvr
 from vfmodel.greybox.effects import PAPER_EFFECTS
 from vfmodel.greybox.identify import (
     Identification,
+    RotatingFit,
     film_equivalent,
     identify,
     log_interval,
@@ -127,7 +128,8 @@ def _f(x: float) -> float:
 
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = (2, 3, 4), blackbox: bool = True,
-              max_nfev: int = 40, progress: Progress = no_progress) -> ReproduceResult:
+              max_nfev: int = 40, progress: Progress = no_progress,
+              rotating_fit: RotatingFit = "record") -> ReproduceResult:
     """Run the paper's pipeline on ``dataset`` (see the module docstring)."""
     if not dataset.impedance:
         raise InputError("reproduce needs impedance spectra", source=dataset.name,
@@ -136,7 +138,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
-                     progress=progress)
+                     progress=progress, rotating_fit=rotating_fit)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
     # ---- impedance (Table II)
@@ -203,6 +205,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                 "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
                 "c_b_f": log_interval(sf.params, rep,
                                       lambda q: divider_capacitances(q, eff)["c_b"]),
+                "c_b_100khz_f": log_interval(sf.params, rep,
+                                             lambda q: bearing_capacitance(q, eff)),
             }
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
             entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
