@@ -529,7 +529,19 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         ext_fit, jrep = fit_stage(jterms, ext, jnames, "joint (all speeds)",
                                   max_nfev=max_nfev_joint, prior_sigma=prior_sigma,
                                   progress=progress)
-        stages.append(jrep)
+
+        def misfit(term: Term, q: ParamSet) -> float:
+            r = term.residual(q)[0]
+            return float(r @ r)
+
+        # the machine stages' own data must not get worse: the joint result is kept only
+        # if the spectra and the standstill transfer fit within 10 % of their chi-square
+        machine_terms = jterms[: len(jterms) - len(rot)]
+        if all(misfit(t, ext_fit) <= 1.1 * misfit(t, ext) for t, _ in machine_terms):
+            stages.append(jrep)
+        else:
+            joint = False
+    if joint and rot:
         p = ParamSet(tuple(ext_fit.spec(n) for n in base), tuple(ext_fit[n] for n in base))
         idx = {n: i for i, n in enumerate(jnames)}
         new_fits = [SpeedFit(f.speed_rpm, f.state, p, f.term, None) for f in fits
