@@ -69,7 +69,7 @@ def _order(value: str) -> int | str:
               "the others.")
 @click.option("--passive", is_flag=True, help="Enforce passivity (certified by the "
               "Hamiltonian test and a sampling cross-check) with a convex program.")
-@click.option("--enforce-iterations", type=click.IntRange(min=1), default=30,
+@click.option("--enforce-iterations", type=click.IntRange(min=1), default=60,
               show_default=True, help="Convex programs of the passivity enforcement.")
 @click.option("--enforce-margin", type=click.FloatRange(min=0, max=0.1, min_open=True,
                                                         max_open=True),

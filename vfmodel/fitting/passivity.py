@@ -422,7 +422,7 @@ def enforce_passivity(
     *,
     weighting: Literal["relative", "uniform"] = "relative",
     perturb_d: bool = True,
-    max_iter: int = 30,
+    max_iter: int = 60,
     margin: float = 1e-6,
     allow_active: bool = False,
 ) -> tuple[RationalModel, PassivityReport]:
