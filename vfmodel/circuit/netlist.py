@@ -150,6 +150,30 @@ def check_value(el: Element, value: float, allow_negative: bool) -> None:
         )
 
 
+class NodeSets:
+    """Disjoint sets of node names (union-find with path halving): which nodes are
+    connected through a set of two-terminal elements."""
+
+    def __init__(self) -> None:
+        self._parent: dict[str, str] = {}
+
+    def find(self, n: str) -> str:
+        """Representative of ``n``'s set (``n`` itself when first seen)."""
+        parent = self._parent
+        while parent.setdefault(n, n) != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+
+    def union(self, a: str, b: str) -> bool:
+        """Join the sets of ``a`` and ``b``; False when they were one set already."""
+        ra, rb = self.find(a), self.find(b)
+        if ra == rb:
+            return False
+        self._parent[ra] = rb
+        return True
+
+
 @dataclass(frozen=True)
 class Circuit:
     """Immutable netlist of linear elements (see the module docstring).
@@ -383,21 +407,8 @@ class Circuit:
         VCVS/CCVS outputs and closed switches short-circuits a source.
         """
         g = self.ground
-        parent: dict[str, str] = {}
-
-        def find(n: str) -> str:
-            while parent.setdefault(n, n) != n:
-                parent[n] = parent[parent[n]]
-                n = parent[n]
-            return n
-
-        vparent: dict[str, str] = {}
-
-        def vfind(n: str) -> str:
-            while vparent.setdefault(n, n) != n:
-                vparent[n] = vparent[vparent[n]]
-                n = vparent[n]
-            return n
+        conn, vconn = NodeSets(), NodeSets()
+        find = conn.find
 
         for el in self.elements:
             if el.kind in ("isource", "mutual"):
@@ -407,16 +418,14 @@ class Circuit:
             if el.kind == "conductance" and el.value == 0.0:
                 continue
             a, b = el.nodes[0], el.nodes[1]
-            parent[find(a)] = find(b)
+            conn.union(a, b)
             if el.kind in VOLTAGE_DEFINED:
-                ra, rb = vfind(a), vfind(b)
-                if ra == rb:
+                if not vconn.union(a, b):
                     raise CircuitError(
                         f"element {el.name!r} ({el.kind}): voltage source short-circuited "
                         f"(closes a loop of voltage sources/closed switches between nodes "
                         f"{a!r} and {b!r})"
                     )
-                vparent[ra] = rb
         root = find(g)
         floating = [n for n in self.nodes if find(n) != root]
         if floating:

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vfmodel.circuit.mna import MnaSystem
-from vfmodel.circuit.netlist import Circuit, Element
+from vfmodel.circuit.netlist import Circuit, Element, NodeSets
 from vfmodel.circuit.poles import network_poles
 from vfmodel.circuit.spice_import import parse_value
 from vfmodel.core.io_spectrum import read_spectrum
@@ -231,19 +231,12 @@ def _check_topology(elements: list[tuple[str, str, str, str, float, str | None]]
                          found=f"{len(nodes - {'0'})} nodes, {n_free} free parameters",
                          expected=f"at most {MAX_NODES} nodes and {MAX_FREE_PARAMS} free "
                          "parameters (each refit costs one network solve per parameter)")
-    parent: dict[str, str] = {}
-
-    def find(n: str) -> str:
-        while parent.setdefault(n, n) != n:
-            parent[n] = parent[parent[n]]
-            n = parent[n]
-        return n
-
+    sets = NodeSets()
     for e in elements:
-        parent[find(e[2])] = find(e[3])
-    ground = find("0")
+        sets.union(e[2], e[3])
+    ground = sets.find("0")
     for e in elements:
-        if find(e[2]) != ground:
+        if sets.find(e[2]) != ground:
             raise InputError("floating sub-network: no path to ground 0", source=source,
                              place=f"line {elem_line[e[0]]}", found=f"element {e[0]}",
                              expected="every element connected to ground 0 through others")
