@@ -122,8 +122,10 @@ def netlist_text(ident: Identification, speed_rpm: float) -> str:
     return to_spice(circ, title=title, extra_lines=usage)
 
 
-def _f(x: float) -> float:
-    return float(x) if np.isfinite(x) else 0.0
+def _f(x: float) -> float | None:
+    """A finite number, or None (JSON null) where it is undefined or unbounded: a relative
+    error against a measured value of 0, an uncertainty the data do not bound."""
+    return float(x) if np.isfinite(x) else None
 
 
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
@@ -238,10 +240,13 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     bearing["mean_spectral_corr"] = float(np.mean(corr_all))
     res["bearing"] = bearing
     res["baseline_bvr"] = base
-    res["greybox_beats_baseline"] = {
-        rpm_key(s.speed_rpm): bool(bearing[rpm_key(s.speed_rpm)]["rel_err_pct"]
-                                   < base[rpm_key(s.speed_rpm)]["rel_err_pct"])
-        for s in speeds}
+    def beats(key: str) -> bool:
+        # undefined relative errors (measured peak 0) cannot show the grey box better
+        g, b = bearing[key]["rel_err_pct"], base[key]["rel_err_pct"]
+        return g is not None and b is not None and bool(g < b)
+
+    res["greybox_beats_baseline"] = {rpm_key(s.speed_rpm): beats(rpm_key(s.speed_rpm))
+                                     for s in speeds}
     # speeds where the classical divider predicts the peak better: flagged, not averaged
     res["flagged_speeds"] = [k for k, v in res["greybox_beats_baseline"].items() if not v]
     # ---- identification summary
