@@ -1,7 +1,7 @@
 """Independent virtual motor benches: structurally unlike the grey-box model (issue 19).
 
 What differs from the grey-box network of :mod:`vfmodel.greybox.assembly` (and from the
-project's own bench :mod:`vfmodel.greybox.truth`), each drawn per seed:
+project's own bench :mod:`benches.truth`), each drawn per seed:
 
 - winding: 5-8 coils per phase, each an RL ladder of 5 rungs with its own loss and
   inter-turn capacitance, per-coil asymmetry; the winding-frame and winding-rotor
@@ -40,6 +40,7 @@ from vfmodel.circuit.netlist import Circuit, Element
 from vfmodel.core.atomic import atomic_directory
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_spectrum import csv_text
+from vfmodel.greybox.metrics import spectral_corr
 from vfmodel.signals.filters import brickwall_filter
 
 ArrF = NDArray[np.float64]
@@ -441,6 +442,9 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
             toml += ["", "[[recording]]", f"speed_rpm = {float(s)}", f'file = "recordings/{name}"']
             recs[str(round(s))] = {
                 "peak_u_b_clean_v": float(np.abs(brickwall_filter(y[3], d.fs_hz, 10e6)).max()),
+                # what a perfect model can reach against this noisy record
+                "spectral_corr_ceiling": spectral_corr(y[3], noisy[3].astype(np.float32),
+                                                       d.fs_hz),
                 "equivalents": equivalents(d, s)}
         (tmp / "dataset.toml").write_text("\n".join(toml) + "\n")
         summary: dict[str, object] = {

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
+from pathlib import Path
 
 # one BLAS thread: on a shared 2-core machine threaded BLAS is oversubscribed and batched
 # small solves get ~40x slower (measured); set before numpy is imported
@@ -24,8 +26,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
+
+from benches.random_networks import random_rlc_network
 from vfmodel.circuit.ngspice import run_ac
-from vfmodel.circuit.random_networks import random_rlc_network
 from vfmodel.circuit.spice_export import spice_names, to_spice
 
 

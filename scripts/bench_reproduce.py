@@ -46,8 +46,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="JSON of an earlier --save: print its figures beside this run's")
     a = ap.parse_args(argv)
 
-    from vfmodel.cli._common import write_json
-    from vfmodel.core.atomic import atomic_write_text
+    from vfmodel.core.atomic import atomic_write_text, write_json
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.pipeline.reproduce import reproduce
     from vfmodel.report.html import write_reproduce_html

@@ -13,13 +13,17 @@ their ratio and the maximum difference relative to the peak.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
+
+from benches.three_phase import FS, netlist, network_model, pwm_breakpoints
 from vfmodel.circuit.ngspice import run_tran
 from vfmodel.signals.simulate import simulate
-from vfmodel.testing import FS, netlist, network_model, pwm_breakpoints
 
 
 def main() -> None:

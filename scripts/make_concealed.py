@@ -16,9 +16,9 @@ values and effect sizes (the acceptance style "datasets never seen"; needs ``--o
 the detective's network (skin-effect ladders with more rungs, more winding sections), so
 the starting model cannot reproduce the data exactly even where nothing is concealed.
 
-PMSM cases (:data:`vfmodel.greybox.concealed.PMSM_CASES`): each entry also holds ``size``
+PMSM cases (:data:`benches.concealed.PMSM_CASES`): each entry also holds ``size``
 (the effect's parameter values), ``proxy_chi2_red`` and ``proxy`` (calibration fit of the
-starting model to the noise-free truth, :func:`vfmodel.greybox.concealed.proxy_fit`; about
+starting model to the noise-free truth, :func:`benches.concealed.proxy_fit`; about
 20-60 s per case, ``--no-proxy`` skips it).
 """
 
@@ -32,13 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from vfmodel.core.atomic import atomic_directory
-from vfmodel.core.frequency_data import FrequencyData
-from vfmodel.core.io_spectrum import csv_text
-from vfmodel.detective.candidates import make_candidate
-from vfmodel.detective.problem import Candidate, Channel
-from vfmodel.detective.user_model import UserFamily, read_user_model
-from vfmodel.greybox.concealed import (
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
+
+from benches.concealed import (
     PMSM_CASES,
     BenchConfig,
     ConcealedCase,
@@ -47,6 +43,12 @@ from vfmodel.greybox.concealed import (
     proxy_fit,
     write_case,
 )
+from vfmodel.core.atomic import atomic_directory
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_spectrum import csv_text
+from vfmodel.detective.candidates import make_candidate
+from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.user_model import UserFamily, read_user_model
 from vfmodel.greybox.params import ParamSet
 
 ROOT = Path(__file__).resolve().parents[1]

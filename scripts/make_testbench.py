@@ -5,8 +5,8 @@
 
 Impedance spectra of the six topologies (1 kHz - 10 MHz, log spaced, relative complex
 noise ``--z-noise``) at standstill, and recordings ``rpm0000 ... rpm0500`` of the periodic
-steady state of the truth network (vfmodel.greybox.truth) fed by a two-level SiC inverter
-through a cable (vfmodel.greybox.bench), with probe bandwidth, white noise and EMI.
+steady state of the truth network (benches.truth) fed by a two-level SiC inverter
+through a cable (vfmodel.greybox.drive), with probe bandwidth, white noise and EMI.
 ``truth.json`` holds the truth parameters and the noise-free calibration numbers (for
 tests; the pipeline does not read it). Deterministic for a given seed and arguments.
 
@@ -23,26 +23,27 @@ from pathlib import Path
 
 import numpy as np
 
-from vfmodel.core.atomic import atomic_directory
-from vfmodel.core.frequency_data import FrequencyData
-from vfmodel.core.io_spectrum import csv_text
-from vfmodel.greybox.assembly import TOPOLOGY_PORTS, divider_capacitances
-from vfmodel.greybox.bench import (
-    CableSpec,
-    InverterSpec,
-    ScopeSpec,
-    add_noise,
-    bench_circuit,
-    make_emi,
-    snr_db,
-    steady_state,
-)
-from vfmodel.greybox.truth import (
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
+
+from benches.noise import add_noise, make_emi, snr_db
+from benches.truth import (
     BENCH_VARIANTS,
     build_truth_network,
     lubricant_at_speed,
     truth_detail,
     truth_params,
+)
+from vfmodel.core.atomic import atomic_directory
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_spectrum import csv_text
+from vfmodel.greybox.assembly import TOPOLOGY_PORTS
+from vfmodel.greybox.bearing import divider_capacitances
+from vfmodel.greybox.drive import (
+    CableSpec,
+    InverterSpec,
+    ScopeSpec,
+    drive_circuit,
+    steady_state,
 )
 from vfmodel.signals.filters import brickwall_filter
 
@@ -107,7 +108,7 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
             p, st = lubricant_at_speed(tp, rpm)
             net = build_truth_network(p, det, effects, st)
             clean[rpm] = steady_state(net, inv, cable, scope, rpm,
-                                      mna=bench_circuit(net, cable).mna)
+                                      mna=drive_circuit(net, cable).mna)
         ref = clean[min(speeds)][3]
         bearing_rms = float(np.std(ref)) / 10 ** (scope.snr_bearing_db_standstill / 20)
         recs = {}

@@ -56,16 +56,16 @@ def _impedance_truth(seeds: list[int]) -> None:
     generated as scripts/make_testbench.py does)."""
     import numpy as np
 
-    from vfmodel.core.frequency_data import FrequencyData
-    from vfmodel.fitting.vectfit import vector_fit
-    from vfmodel.greybox.assembly import TOPOLOGY_PORTS
-    from vfmodel.greybox.truth import (
+    from benches.truth import (
         BENCH_VARIANTS,
         build_truth_network,
         lubricant_at_speed,
         truth_detail,
         truth_params,
     )
+    from vfmodel.core.frequency_data import FrequencyData
+    from vfmodel.fitting.vectfit import vector_fit
+    from vfmodel.greybox.assembly import TOPOLOGY_PORTS
 
     print("seed topology order  per-point RMS vs truth  max vs truth  RMS vs data  "
           "(uniform weighting: RMS vs truth)")
@@ -258,7 +258,8 @@ def main() -> int:
         if "err_pas" in vf:
             bound = max(vf["err"], vf["floor"] or 0.0)
             stats["enf"].append((path.name, vf["err_pas"], bound))
-        if "INTERNAL" in vf.get("note", "") or vf.get("pas") is False:
+        note = vf.get("note", "")
+        if "INTERNAL" in note or "FAILED" in note or vf.get("pas") is False:
             stats["bad"].append(path.name)
         cells = [path.name, _fmt(vf.get("ports"), "d"), _fmt(vf.get("points"), "d"),
                  f"{_fmt(vf.get('order'), 'd')}/{_fmt(sk.get('order'), 'd')}",
@@ -289,7 +290,8 @@ def _summary(stats: dict[str, list[Any]]) -> None:
     print(f"enforced error <= 1.2 x max(fit error, data floor): {len(within)} of {len(enf)}; "
           "beyond: " + ", ".join(f"{n} ({e / max(b, 1e-300):.3g}x)" for n, e, b in enf
                                  if n not in within))
-    print("internal errors or enforced models failing the dense check: "
+    print("exit-1 failures (internal or solver errors) or enforced models failing the dense "
+          "check: "
           + (", ".join(stats["bad"]) or "none"))
 
 

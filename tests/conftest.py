@@ -17,7 +17,7 @@ from types import ModuleType  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from vfmodel.testing import make_small_dataset  # noqa: E402
+from benches.small_dataset import make_small_dataset  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 TOUCHSTONE_DIR = REPO / "data" / "touchstone"
@@ -40,7 +40,7 @@ def load_script(name: str) -> ModuleType:
 
 
 def make_dataset(root: Path, n_samples: int = 4096) -> Path:
-    """The small example dataset of :mod:`vfmodel.testing` (seeded)."""
+    """The small example dataset of :mod:`benches.small_dataset` (seeded)."""
     return make_small_dataset(root, seed=1, n_samples=n_samples)
 
 

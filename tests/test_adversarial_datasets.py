@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from benches.small_dataset import make_small_dataset
 from tests._adversarial import assert_refused, copy_tree, run_cli, snapshot
-from vfmodel.testing import make_small_dataset
 
 SECRET = "SECRET-TOKEN-4711"
 TOML = "dataset.toml"

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from benches.small_dataset import make_small_dataset
 from tests._adversarial import (
     GREYBOX_NETLIST,
     assert_refused,
@@ -27,7 +28,6 @@ from tests._adversarial import (
     snapshot,
     z_csv,
 )
-from vfmodel.testing import make_small_dataset
 
 PYTHON = sys.executable
 
@@ -55,11 +55,14 @@ def fake_fit(monkeypatch: pytest.MonkeyPatch, fit_result: Any) -> None:
     (atomically; the real figure takes seconds and is tested with the fit itself)."""
     import vfmodel.pipeline.fit_job as fj
     import vfmodel.report.fit_figures as ff
-    from vfmodel.core.atomic import atomic_write_bytes
+    from vfmodel.core.atomic import atomic_path
+
+    def stub(data: Any, model: Any, path: Path, *a: Any, **k: Any) -> None:
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(b"\x89PNG stub")
 
     monkeypatch.setattr(fj, "run_fit", lambda *a, **k: fit_result)
-    monkeypatch.setattr(ff, "plot_fit", lambda data, model, path, *a, **k:
-                        atomic_write_bytes(path, b"\x89PNG stub"))
+    monkeypatch.setattr(ff, "plot_fit", stub)
 
 
 @pytest.fixture(scope="module")
@@ -344,7 +347,7 @@ def test_outputs_respect_the_umask(mask: int, tmp_path: Path, spectrum: Path,
 
 def test_strict_json_everywhere(tmp_path: Path, spectrum: Path, fake_fit: None,
                                 capsys: pytest.CaptureFixture[str]) -> None:
-    from vfmodel.cli._common import finite_json
+    from vfmodel.core.atomic import finite_json
 
     assert finite_json({"a": [1.0, float("inf"), np.float64("nan")], "b": (np.inf,)}) == {
         "a": [1.0, None, None], "b": [None]}

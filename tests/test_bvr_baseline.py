@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vfmodel.circuit.netlist import Circuit
-from vfmodel.greybox.bvr_baseline import (
+from vfmodel.greybox.bearing import (
     C_B_MAX_F,
     average_bvr,
     bvr_baseline,

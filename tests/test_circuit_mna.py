@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benches.random_networks import random_rlc_network
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.circuit.poles import network_poles
-from vfmodel.circuit.random_networks import random_rlc_network
 
 F = np.logspace(2, 7, 60)
 

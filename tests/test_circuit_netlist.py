@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benches.random_networks import random_rlc_network
 from vfmodel.circuit.netlist import Circuit
-from vfmodel.circuit.random_networks import random_rlc_network
 from vfmodel.circuit.spice_export import to_spice
 from vfmodel.circuit.spice_import import from_spice, parse_value
 from vfmodel.errors import CircuitError

@@ -1,4 +1,4 @@
-"""Concealed-effect PMSM datasets (data/concealed, vfmodel.greybox.concealed): committed
+"""Concealed-effect PMSM datasets (data/concealed, benches.concealed): committed
 data = deterministic regeneration, the concealed effect is in the data, null cases have
 the model's structure, sizes, readability."""
 
@@ -10,9 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vfmodel.core.io_dataset import read_dataset
-from vfmodel.greybox.assembly import TOPOLOGY_PORTS, default_params
-from vfmodel.greybox.concealed import (
+from benches.concealed import (
     LOCATIONS,
     PMSM_CASES,
     BenchConfig,
@@ -21,6 +19,8 @@ from vfmodel.greybox.concealed import (
     truth_spectra,
     truth_values,
 )
+from vfmodel.core.io_dataset import read_dataset
+from vfmodel.greybox.assembly import TOPOLOGY_PORTS, default_params
 from vfmodel.greybox.effects import EFFECT_INFO, PAPER_EFFECTS
 from vfmodel.greybox.params import ParamSet
 

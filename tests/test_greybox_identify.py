@@ -9,13 +9,11 @@ import numpy as np
 import pytest
 import scipy.fft as sfft
 
+from vfmodel.circuit.transfer import transfer_on
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
-from vfmodel.greybox._fast import transfer_on
 from vfmodel.greybox._h1op import h1_operator
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import bearing_term, impedance_term, prepare_recording
 from vfmodel.greybox.assembly import (
     BEARING_NODE,
     SOURCES,
@@ -23,7 +21,10 @@ from vfmodel.greybox.assembly import (
     build_network,
     default_params,
 )
-from vfmodel.greybox.identify import film_equivalent, fit_stage
+from vfmodel.greybox.bearing import film_equivalent
+from vfmodel.greybox.identify import fit_stage
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import bearing_term, impedance_term, prepare_recording
 from vfmodel.signals.h1 import h1_analysis
 
 P0 = default_params()

@@ -12,9 +12,9 @@ from vfmodel.greybox.assembly import (
     bearing_transfer,
     build_network,
     default_params,
-    divider_capacitances,
     topology_impedance,
 )
+from vfmodel.greybox.bearing import divider_capacitances
 from vfmodel.greybox.effects import EFFECT_INFO, PAPER_EFFECTS
 from vfmodel.greybox.params import ParamSet, ParamSpec
 from vfmodel.greybox.substructures import insulation, ladder_values, rl_ladder, rl_plain
@@ -177,3 +177,18 @@ def test_assembly_impedance_matches_ngspice() -> None:
     res = run_ac(to_spice(c_i), ["v(U)"], f_start_hz=1e3, f_stop_hz=1e7, points_per_decade=20)
     z = topology_impedance(p, res.freq_hz, ["U-Frame"])["U-Frame"]
     assert np.max(np.abs(res.values[:, 0] - z) / np.abs(z)) < 1e-6
+
+
+@pytest.mark.parametrize("state", ["standstill", "rotating"])
+@pytest.mark.parametrize("n_sections", [2, 3])
+def test_network_values_without_rebuilding_the_netlist(state: str, n_sections: int) -> None:
+    """The identification's element values (no netlist built) are the netlist's own."""
+    from vfmodel.greybox.assembly import network_values
+    from vfmodel.greybox.effects import ALL_EFFECTS
+
+    p = default_params().perturbed(np.random.default_rng(3), 0.3)
+    for eff in (PAPER_EFFECTS, ALL_EFFECTS, frozenset()):
+        ref = build_network(p, eff, state, n_sections=n_sections,  # type: ignore[arg-type]
+                            sources=True).param_values
+        got = network_values(p, eff, state, n_sections=n_sections)  # type: ignore[arg-type]
+        np.testing.assert_array_equal(got, ref)

@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 import scipy.fft as sfft
 
+from vfmodel.circuit.transfer import transfer_on
 from vfmodel.core.recording import Recording
-from vfmodel.greybox._fast import transfer_on
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import prepare_recording
-from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, default_params, divider_capacitances
+from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, default_params
+from vfmodel.greybox.bearing import divider_capacitances
 from vfmodel.greybox.identify import fit_stage, log_interval
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import prepare_recording
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.record_fit import record_term
 
@@ -140,3 +141,32 @@ def test_speed_copy_maps_shared_and_per_speed_columns(record: Recording) -> None
     np.testing.assert_allclose(r, direct, rtol=1e-10, atol=1e-10)
     assert np.all(jm[:, 2] == 0.0)                       # another speed's copy
     _assert_jacobian(wrapped, ext, names[:2], jm[:, :2])
+
+
+def test_joint_stage_recovers_the_winding_rotor_capacitance(record: Recording) -> None:
+    # reference: the record of the network with the TRUTH values. With the machine's C_wr
+    # started 2x too large, the lubricant alone cannot fit the record (reduced chi-square
+    # far above 1: the film matches the plateau, the ringing ratio C_wr/(C_wr+C_rf) stays
+    # wrong); the joint stage (greybox.joint) refits C_wr with the lubricant and recovers it
+    from vfmodel.greybox.identify import JOINT_TRIGGER, SpeedFit, joint_stage
+    from vfmodel.greybox.objective import bearing_term
+
+    prep = prepare_recording(record)
+    spec = NetSpec()
+    lub = ("lubricant.C_1", "lubricant.C_2", "bearing.R_h")
+    c_wr = TRUTH["insulation.C_wr"]
+    for start, wrong in ((TRUTH, False), (TRUTH.with_values({"insulation.C_wr": 2 * c_wr}), True)):
+        term = record_term(prep, spec, start, "rotating")
+        fit, rep = fit_stage([(term, 1.0)], start, lub, "lubricant 300 rpm", max_nfev=30)
+        sf = SpeedFit(300.0, "rotating", fit, bearing_term(prep, spec, fit, "rotating"), rep,
+                      term)
+        res = joint_stage(fit, [sf], [rep], [], lub, shared=("insulation.C_wr",))
+        if not wrong:
+            # the record fits to its noise: nothing for a joint refit to correct
+            assert rep.chi2_red < 1.3 and res is None
+            continue
+        assert rep.chi2_red > JOINT_TRIGGER and res is not None
+        p, fits, jrep = res
+        assert abs(p["insulation.C_wr"] / c_wr - 1) < 0.03
+        assert fits[0].params["insulation.C_wr"] == p["insulation.C_wr"]
+        assert jrep.rel_std["insulation.C_wr"] < 0.03

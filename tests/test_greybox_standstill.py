@@ -10,20 +10,20 @@ import pytest
 import scipy.fft as sfft
 
 from tests.conftest import load_script
+from vfmodel.circuit.transfer import transfer_on
 from vfmodel.core.io_dataset import read_dataset
 from vfmodel.core.recording import Recording
-from vfmodel.greybox._fast import transfer_on
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import (
+from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, default_params
+from vfmodel.greybox.identify import identify
+from vfmodel.greybox.metrics import peak_v
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import (
     PreparedRecording,
     bearing_term,
     input_noise_psd,
     periodic_lines,
     prepare_recording,
 )
-from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, default_params
-from vfmodel.greybox.identify import identify
-from vfmodel.greybox.metrics import peak_v
 
 P0 = default_params()
 FS = 100e6

@@ -11,7 +11,8 @@ import scipy.signal as ss
 import vfmodel
 from vfmodel import RationalModel
 from vfmodel.errors import IllConditionedWarning, InputError, SignalWarning
-from vfmodel.signals.h1 import bvr, h1_analysis, h1_analysis_blocks
+from vfmodel.greybox.bearing import bvr
+from vfmodel.signals.h1 import h1_analysis, h1_analysis_blocks
 from vfmodel.signals.simulate import discrete_transfer, simulate_periodic
 
 FS = 100e6

@@ -230,7 +230,7 @@ def test_binary_touchstone_refused_before_reading_it_all(tmp_path: Path,
             reads.append(len(data))
             return data
 
-    import vfmodel.core._text as text_mod
+    import vfmodel.core.text as text_mod
 
     monkeypatch.setattr(text_mod, "open", lambda *a, **k: Spy(real_open(*a, **k)),
                         raising=False)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benches.random_networks import random_rlc_network
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.circuit.ngspice import run_ac, run_tran
-from vfmodel.circuit.random_networks import random_rlc_network
 from vfmodel.circuit.spice_export import spice_names, to_spice
 from vfmodel.circuit.spice_import import from_spice
 from vfmodel.errors import SimulatorError

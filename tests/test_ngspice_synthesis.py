@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benches.random_networks import random_rlc_network
 from tests.test_circuit_synthesis import fitted_like_model
 from vfmodel.circuit.ngspice import run_ac, run_tran
-from vfmodel.circuit.random_networks import random_rlc_network
 from vfmodel.circuit.synthesis import model_to_spice
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel

@@ -20,8 +20,8 @@ from vfmodel.circuit.ngspice import run_ac
 from vfmodel.circuit.spice_import import from_spice
 from vfmodel.cli.main import main
 from vfmodel.core.io_dataset import read_dataset
-from vfmodel.greybox._network import NetSpec
 from vfmodel.greybox.assembly import TOPOLOGY_PORTS, param_specs
+from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.filters import brickwall_filter
 

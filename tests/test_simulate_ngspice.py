@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benches.three_phase import FS, netlist, network_model, pwm_breakpoints
 from vfmodel.circuit.ngspice import ngspice_available, run_tran
 from vfmodel.signals.simulate import simulate
-from vfmodel.testing import FS, netlist, network_model, pwm_breakpoints
 
 pytestmark = [
     pytest.mark.ngspice,

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 import vfmodel
-from tests.conftest import load_script
-from vfmodel.greybox.bench import CableSpec, InverterSpec, ScopeSpec, edge_spectrum, steady_state
-from vfmodel.greybox.truth import (
+from benches.truth import (
     build_truth_network,
     lubricant_at_speed,
     truth_detail,
     truth_params,
 )
+from tests.conftest import load_script
+from vfmodel.greybox.drive import CableSpec, InverterSpec, ScopeSpec, edge_spectrum, steady_state
 from vfmodel.pipeline.summary import spectrum_noise_pct
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,7 +53,7 @@ def test_bench_reads_and_has_paper_magnitudes(bench: Path) -> None:
     d = truth["divider"]
     assert abs(d["c_wr"] / 637e-12 * 1 / (1 + truth["truth_params"]["insulation.k_d"]) - 1) < 0.15
     assert abs(d["bvr"] / 0.0162 - 1) < 0.15
-    # SNR by construction (definition in vfmodel.greybox.bench): 35 dB inputs, 1.3 dB u_B at 0 rpm
+    # SNR by construction (definition in vfmodel.greybox.drive): 35 dB inputs, 1.3 dB u_B at 0 rpm
     assert abs(rec["0"]["snr_terminal_db"] - 35.0) < 0.3
     assert abs(rec["0"]["snr_u_b_db"] - 1.3) < 0.3
     assert rec["100"]["snr_u_b_db"] > 20.0

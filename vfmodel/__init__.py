@@ -33,7 +33,7 @@ _EXPORTS: dict[str, str] = {
     # signals
     "h1_estimate": "vfmodel.signals.h1",
     "h1_analysis": "vfmodel.signals.h1",
-    "bvr": "vfmodel.signals.h1",
+    "bvr": "vfmodel.greybox.bearing",
     "brickwall_filter": "vfmodel.signals.filters",
     "simulate": "vfmodel.signals.simulate",
     "simulate_periodic": "vfmodel.signals.simulate",

@@ -30,8 +30,9 @@ set: with a real shift ``s0`` and
 ``(G + s C)^-1 = V diag(1 / (1 + (s - s0) theta)) V^-1 K``, so each further frequency
 costs O(N n_in) (fastest; use it for many evaluations with few outputs). Both fast solvers
 are checked against direct solves at the band edges and the middle (norm-wise relative
-agreement 1e-9 over the outputs at each checked frequency) and replaced by the direct
-solver when they fail; their accuracy is norm-wise, so an output far smaller than the
+agreement 1e-9 over the outputs at each checked frequency; the solvers and this tolerance
+policy live in :mod:`._solvers`) and replaced by the direct solver when they fail; their
+accuracy is norm-wise, so an output far smaller than the
 others at the same frequency (or a derivative that is exactly zero) may carry a larger
 relative error than with the direct solvers.
 
@@ -50,19 +51,22 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
-from vfmodel.circuit._hessenberg import hessenberg_solve
+from vfmodel.circuit._solvers import (
+    Solution,
+    solve_dense,
+    solve_hessenberg,
+    solve_modal,
+    solve_sparse,
+)
 from vfmodel.circuit.netlist import Circuit, Excitation, Probe
 from vfmodel.errors import CircuitError, InputError
 
 SolveMethod = Literal["auto", "dense", "sparse", "hessenberg", "modal"]
 _DENSE_MAX = 100          # unknowns up to which "auto" uses the dense batched solver
-_CHUNK_BYTES = 64 << 20   # memory for one batch of dense complex matrices
-_MODAL_CHECK = 1e-9       # relative agreement required between modal and direct solves
+_CHUNK_BYTES = 64 << 20   # memory for one batch of adjoint products
 
 _BRANCH_KINDS = ("inductor", "vsource", "switch", "vcvs", "ccvs")
 _Q_LIN, _Q_INV, _Q_MUT = 0, 1, 2
@@ -70,16 +74,6 @@ _Q_LIN, _Q_INV, _Q_MUT = 0, 1, 2
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
 ArrI = NDArray[np.intp]
-
-
-@dataclass(frozen=True)
-class Solution:
-    """Batched solution: ``h (n_f, n_out, n_in)``; with the adjoint also ``x`` and ``lam``."""
-
-    h: ArrC
-    x: ArrC | None = None      # (n_f, N, n_in)  A^-1 B
-    lam: ArrC | None = None    # (n_f, N, n_out) A^-T Cout
-    method: str = "dense"
 
 
 @dataclass(frozen=True)
@@ -401,19 +395,19 @@ class MnaSystem:
         if method == "auto":
             method = direct
         if method == "hessenberg":
-            sol = _solve_hessenberg(g, c, s, b, cout, adjoint)
+            sol = solve_hessenberg(g, c, s, b, cout, adjoint)
             if sol is not None:
                 return sol
             method = direct
         if method == "modal":
-            sol = _solve_modal(g, c, s, b, cout, adjoint)
+            sol = solve_modal(g, c, s, b, cout, adjoint)
             if sol is not None:
                 return sol
             method = direct
         if method == "dense":
-            return _solve_dense(g, c, s, b, cout, adjoint)
+            return solve_dense(g, c, s, b, cout, adjoint)
         if method == "sparse":
-            return _solve_sparse(g, c, s, b, cout, adjoint)
+            return solve_sparse(g, c, s, b, cout, adjoint)
         raise InputError(f"method: got {method!r}; expected 'auto', 'dense', 'sparse', "
                          "'hessenberg' or 'modal'")
 
@@ -538,122 +532,3 @@ def _freq(freq_hz: ArrayLike) -> ArrF:
         raise InputError("freq_hz must be a 1-D array of finite frequencies",
                          found=f"shape {f.shape}")
     return f
-
-
-def _singular(where: str) -> CircuitError:
-    return CircuitError(
-        f"the MNA matrix is singular {where}: the network has no unique solution there "
-        "(e.g. an LC loop resonating exactly, a node joined only by capacitors at DC, or "
-        "a cut set of inductors and current sources)"
-    )
-
-
-def _solve_dense(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -> Solution:
-    n = g.shape[0]
-    chunk = max(1, _CHUNK_BYTES // (16 * n * n))
-    hs: list[ArrC] = []
-    xs: list[ArrC] = []
-    ls: list[ArrC] = []
-    for k in range(0, s.size, chunk):
-        a = g[None] + s[k:k + chunk, None, None] * c[None]
-        try:
-            x = np.linalg.solve(a, np.broadcast_to(b, (a.shape[0], *b.shape)))
-            lam = (np.linalg.solve(np.swapaxes(a, 1, 2),
-                                   np.broadcast_to(cout, (a.shape[0], *cout.shape)))
-                   if adjoint else None)
-        except np.linalg.LinAlgError:
-            raise _singular(f"between {s[k].imag / 2 / np.pi:.6g} Hz and "
-                            f"{s[min(k + chunk, s.size) - 1].imag / 2 / np.pi:.6g} Hz") \
-                from None
-        hs.append(np.einsum("no,fni->foi", cout, x))
-        if lam is not None:
-            xs.append(np.asarray(x, dtype=np.complex128))
-            ls.append(np.asarray(lam, dtype=np.complex128))
-    h = np.concatenate(hs)
-    if adjoint:
-        return Solution(h, np.concatenate(xs), np.concatenate(ls), "dense")
-    return Solution(h, method="dense")
-
-
-def _solve_sparse(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -> Solution:
-    """SuperLU per frequency, one factorisation for ``x`` and ``lambda``. The CSC pattern
-    of ``G + sC`` (the union of both; at ``s = 0`` that of ``G``) is found once and only
-    its values change per frequency: the matrix handed to SuperLU is the one
-    ``csc(G) + s csc(C)`` gives, entry for entry, without rebuilding sparse objects."""
-    n = g.shape[0]
-    h = np.empty((s.size, cout.shape[1], b.shape[1]), complex)
-    x = np.empty((s.size, n, b.shape[1]), complex) if adjoint else None
-    lam = np.empty((s.size, n, cout.shape[1]), complex) if adjoint else None
-    bc = np.asarray(b, dtype=complex)
-    cc = np.asarray(cout, dtype=complex)
-    patterns: dict[bool, tuple[ArrF, ArrF, NDArray[np.intc], NDArray[np.intc]]] = {}
-    for k, sk in enumerate(s):
-        dc_only = bool(sk == 0)
-        if dc_only not in patterns:
-            # column-major nonzeros = canonical CSC order (sorted rows in each column)
-            mask = (g != 0) if dc_only else ((g != 0) | (c != 0))
-            cols, rows = np.nonzero(mask.T)
-            indptr = np.zeros(n + 1, dtype=np.intc)
-            np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
-            patterns[dc_only] = (g[rows, cols], c[rows, cols], rows.astype(np.intc), indptr)
-        gv, cv, ind, ptr = patterns[dc_only]
-        a = sp.csc_array((gv + sk * cv, ind, ptr), shape=(n, n))
-        try:
-            lu = spla.splu(a)
-        except RuntimeError:
-            raise _singular(f"at {sk.imag / 2 / np.pi:.6g} Hz") from None
-        xk = lu.solve(bc)
-        h[k] = cout.T @ xk
-        if x is not None and lam is not None:
-            x[k] = xk
-            lam[k] = lu.solve(cc, trans="T")
-    return Solution(h, x, lam, "sparse")
-
-
-def _spot_check(h: ArrC, g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF) -> bool:
-    """True when ``h`` agrees with direct solves at the band edges and the middle."""
-    idx = np.unique([0, s.size // 2, s.size - 1])
-    ref = _solve_dense(g, c, s[idx], b, cout, False).h
-    err = np.linalg.norm(h[idx] - ref, axis=(1, 2))
-    scale = np.maximum(np.linalg.norm(ref, axis=(1, 2)), 1e-300)
-    return bool(np.all(np.isfinite(h)) and np.all(err <= _MODAL_CHECK * scale))
-
-
-def _solve_hessenberg(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF,
-                      adjoint: bool) -> Solution | None:
-    """Shifted Hessenberg solve (``_hessenberg``); None when it fails the spot check."""
-    out = hessenberg_solve(g, c, s, b, cout, adjoint)
-    if out is None or not _spot_check(out[0], g, c, s, b, cout):
-        return None
-    return Solution(out[0], out[1], out[2], "hessenberg")
-
-
-def _solve_modal(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF,
-                 adjoint: bool) -> Solution | None:
-    """Eigen-decomposition solve; None when it fails the spot check against direct solves."""
-    w_nonzero = np.abs(s.imag[s.imag != 0])
-    s0 = float(np.sqrt(w_nonzero.min() * w_nonzero.max())) if w_nonzero.size else 1.0
-    a0 = g + s0 * c
-    try:
-        lu = sla.lu_factor(np.asarray(a0, dtype=complex), check_finite=False)
-        t = sla.lu_solve(lu, c.astype(complex), check_finite=False)
-        theta, v = np.linalg.eig(t)
-        vinv = np.linalg.inv(v)
-    except (np.linalg.LinAlgError, ValueError):
-        return None
-    if not (np.all(np.isfinite(theta)) and np.all(np.isfinite(vinv))):
-        return None
-    d = 1.0 / (1.0 + (s[:, None] - s0) * theta[None, :])        # (f, N)
-    r = vinv @ sla.lu_solve(lu, b.astype(complex), check_finite=False)   # (N, n_in)
-    lv = cout.T @ v                                              # (n_out, N)
-    h = np.einsum("ok,fk,ki->foi", lv, d, r, optimize=True)
-    if not _spot_check(h, g, c, s, b, cout):
-        return None
-    if not adjoint:
-        return Solution(h, method="modal")
-    x = np.matmul(v, d[:, :, None] * r[None])                   # (f, N, n_in)
-    # lambda = A^-T cout = K^T V^-T diag(d) V^T cout
-    p = sla.lu_solve(lu, vinv.T, trans=1, check_finite=False)   # K^T V^-T
-    q = v.T @ cout                                               # (N, n_out)
-    lam = np.matmul(p, d[:, :, None] * q[None])                  # (f, N, n_out)
-    return Solution(h, x, lam, "modal")

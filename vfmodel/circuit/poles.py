@@ -21,11 +21,10 @@ import numpy as np
 import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
+from vfmodel.circuit._solvers import INF_RATIO_POLES, balance_pencil, finite_mask
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.errors import CircuitError
-
-_INF_RATIO = 1e12  # |s| above this multiple of the pencil's scale ||G||/||C|| is infinite
 
 
 def network_poles(
@@ -55,17 +54,13 @@ def network_poles(
     g, c = mna.matrices(values)
     # balance the pencil with diagonal scaling so that the rows and columns of different
     # physical units (A, V, S, H) have comparable norms; eigenvalues are unchanged
-    dr = 1.0 / np.sqrt(np.maximum(np.abs(g).max(axis=1) + np.abs(c).max(axis=1), 1e-300))
-    dc = 1.0 / np.sqrt(np.maximum(np.abs(g).max(axis=0) + np.abs(c).max(axis=0), 1e-300))
-    gs = dr[:, None] * g * dc[None, :]
-    cs = dr[:, None] * c * dc[None, :]
+    gs, cs, _, _ = balance_pencil(g, c)
     w = sla.eig(-gs, cs, right=False, homogeneous_eigvals=True)
     alpha, beta = w[0], w[1]
     if np.any((np.abs(alpha) < 1e-14) & (np.abs(beta) < 1e-14)):
         raise CircuitError("network_poles: the pencil (G, C) is singular (det(G + sC) = 0 "
                            "for all s); the network has no unique solution")
-    scale = float(np.linalg.norm(gs)) / max(float(np.linalg.norm(cs)), 1e-300)
-    finite = np.abs(alpha) < _INF_RATIO * scale * np.abs(beta)
+    finite = finite_mask(alpha, beta, gs, cs, INF_RATIO_POLES)
     p = alpha[finite] / beta[finite]
     return _pair_and_sort(p)
 

@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 import click
 
-from vfmodel.core.atomic import atomic_write_text
+from vfmodel.core.atomic import finite_json, write_json
 from vfmodel.core.progress import no_progress
+
+__all__ = [
+    "finite_json",
+    "out_option",
+    "progress_bar",
+    "quiet_option",
+    "show_progress",
+    "write_json",
+]
 
 quiet_option = click.option(
     "--quiet", "-q", is_flag=True, help="No progress output on stderr."
@@ -28,29 +35,6 @@ out_option = click.option(
 def show_progress(quiet: bool) -> bool:
     """Progress goes to stderr only when not quiet and stderr is a terminal."""
     return not quiet and sys.stderr.isatty()
-
-
-def finite_json(obj: Any) -> Any:
-    """``obj`` with every non-finite float (inf, -inf, NaN) replaced by ``None``.
-
-    Strict JSON has no infinity or NaN; vfmodel writes ``null`` for such a number (README,
-    "Output files": an unbounded significance, a band reaching infinity, a value that
-    could not be computed).
-    """
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [finite_json(v) for v in obj]
-    if hasattr(obj, "dtype") and hasattr(obj, "tolist"):  # numpy scalar or array
-        return finite_json(obj.tolist())
-    return obj
-
-
-def write_json(path: Path, obj: Any) -> None:
-    """Write ``obj`` as indented strict JSON (non-finite numbers as null), atomically."""
-    atomic_write_text(path, json.dumps(finite_json(obj), indent=2, allow_nan=False) + "\n")
 
 
 class _Bars:

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from vfmodel.cli._common import out_option, progress_bar, quiet_option
+from vfmodel.cli._common import finite_json, out_option, progress_bar, quiet_option
 from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
@@ -121,41 +121,21 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
          out_dir: Path, stage: Path, quiet: bool, subckt_name: str,
          opts: dict[str, Any]) -> None:
     """Fit and write every output into the staging folder ``stage``."""
-    from vfmodel.fitting.model_json import model_to_json, passivity_to_json
-    from vfmodel.pipeline.fit_job import run_fit
+    from vfmodel.pipeline.fit_job import fit_model_json, fit_spice_text, run_fit
 
     data = [read_spectrum(p) for p in spectra]
     res = run_fit(data, order=n_order, kind=kind, weighting=weighting,  # type: ignore[arg-type]
                   passive=passive, progress=progress_bar(quiet), **opts)
-    f = res.data.freq_hz
-    obj = model_to_json(res.model, res.fit, (float(f[0]), float(f[-1])),
-                        None if res.passivity is None else res.passivity.passive)
-    if res.passivity is not None:
-        obj["passivity"] = passivity_to_json(res.passivity, res.unconstrained_rel_rms_error,
-                                             res.data_passivity)
-    obj["order_reason"] = res.fit.order_reason
-    obj["sources"] = [str(p) for p in spectra]
-    from vfmodel.cli._common import write_json
-
+    obj = fit_model_json(res, [str(p) for p in spectra])
     if spice_tmp is not None:
-        from vfmodel.circuit.synthesis import model_to_spice
+        spice_tmp.write_text(fit_spice_text(res, subckt_name), encoding="utf-8")
+    from vfmodel.cli._common import write_json  # looked up at call time (tests inject)
 
-        if res.model.delay:
-            from vfmodel.circuit.spice_export import delayed_subckt
-
-            inner = f"{subckt_name}_rational"
-            text = delayed_subckt(model_to_spice(res.model.without_delay(), name=inner),
-                                  inner, subckt_name, res.model.n_in,
-                                  float(res.model.z0 or 50.0), res.model.delay)
-        else:
-            text = model_to_spice(res.model, name=subckt_name)
-        spice_tmp.write_text(text, encoding="utf-8")
     write_json(stage / "model.json", obj)
     if not no_plot:
         from vfmodel.report.fit_figures import plot_fit
 
         plot_fit(res.data, res.model, stage / "fit.png")
-    from vfmodel.cli._common import finite_json
     from vfmodel.report.fit_html import write_fit_html
 
     write_fit_html(stage / "report.html", finite_json(obj), [] if no_plot else ["fit.png"])

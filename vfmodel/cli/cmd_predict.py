@@ -12,7 +12,6 @@ from vfmodel.errors import InputError
 
 if TYPE_CHECKING:
     from vfmodel.circuit.netlist import Circuit
-    from vfmodel.pipeline.predict import Prediction
 
 MAX_MODEL_NODES = 500
 """Largest model netlist predict solves (every frequency of the record is one MNA solve)."""
@@ -64,6 +63,7 @@ def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: 
         predict_inverter,
         predict_recording,
     )
+    from vfmodel.report.predict_figures import plot_prediction
 
     if (recording is None) == (inverter is None):
         raise click.UsageError("give either RECORDING or --inverter")
@@ -86,7 +86,7 @@ def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: 
             arrays["u_B_measured"] = pred.u_b_measured
         with atomic_path(stage.path("prediction.npz")) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
-        _plot(pred, stage.path("prediction.png"))
+        plot_prediction(pred, stage.path("prediction.png"))
         summary = {**pred.summary, "model": str(model),
                    "excitation": str(recording) if recording is not None else inverter}
         write_json(stage.path("prediction.json"), summary)
@@ -97,7 +97,7 @@ def predict(model: Path, recording: Path | None, inverter: str | None, out_dir: 
 def read_model_netlist(model: Path) -> Circuit:
     """The model netlist as a checked Circuit; InputError naming the file otherwise."""
     from vfmodel.circuit.spice_import import from_spice
-    from vfmodel.core._text import read_text_file
+    from vfmodel.core.text import read_text_file
     from vfmodel.errors import CircuitError
     from vfmodel.pipeline.predict import check_model_nodes
 
@@ -116,21 +116,3 @@ def read_model_netlist(model: Path) -> Circuit:
                          found=f"{len(circ.nodes)} nodes",
                          expected=f"at most {MAX_MODEL_NODES} (a grey-box network has ~50)")
     return circ
-
-
-def _plot(pred: Prediction, path: Path) -> None:
-    import numpy as np
-
-    from vfmodel.report._mpl import pyplot, save
-
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(9, 4))
-    t = np.arange(pred.u_b.size) / pred.fs * 1e3
-    if pred.u_b_measured is not None:
-        ax.plot(t, pred.u_b_measured, lw=0.6, label="measured (10 MHz filter)")
-    ax.plot(t, pred.u_b, lw=0.6, label="predicted")
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("u_B (V)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    save(fig, path)

@@ -10,10 +10,13 @@ of two runs or a partial set. Files are created with the modes the user's umask 
 from __future__ import annotations
 
 import contextlib
+import json
+import math
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 
 def umask() -> int:
@@ -51,12 +54,6 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
-
-
-def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically."""
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(data)
 
 
 @contextlib.contextmanager
@@ -235,3 +232,26 @@ def staged_output(
         stage.commit()
     finally:
         stage.discard()
+
+
+def finite_json(obj: Any) -> Any:
+    """``obj`` with every non-finite float (inf, -inf, NaN) replaced by ``None``.
+
+    Strict JSON has no infinity or NaN; vfmodel writes ``null`` for such a number (README,
+    "Output files": an unbounded significance, a band reaching infinity, a value that
+    could not be computed).
+    """
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [finite_json(v) for v in obj]
+    if hasattr(obj, "dtype") and hasattr(obj, "tolist"):  # numpy scalar or array
+        return finite_json(obj.tolist())
+    return obj
+
+
+def write_json(path: Path, obj: Any) -> None:
+    """Write ``obj`` as indented strict JSON (non-finite numbers as null), atomically."""
+    atomic_write_text(path, json.dumps(finite_json(obj), indent=2, allow_nan=False) + "\n")

@@ -8,11 +8,11 @@ from pathlib import Path
 from typing import Any
 
 from vfmodel._choices import TOPOLOGIES
-from vfmodel.core._text import read_text_file
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_recording import read_recording
 from vfmodel.core.io_spectrum import read_spectrum
+from vfmodel.core.text import read_text_file
 from vfmodel.errors import InputError
 
 RECORDING_KEYS = ("speed_rpm", "file")

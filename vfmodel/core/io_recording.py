@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel.core._text import read_text_file
 from vfmodel.core.atomic import atomic_path, atomic_write_text
 from vfmodel.core.recording import BEARING, TERMINALS, Recording
+from vfmodel.core.text import read_text_file
 from vfmodel.errors import InputError
 
 CHANNELS = (*TERMINALS, BEARING)

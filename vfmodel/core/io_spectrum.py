@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from vfmodel._choices import Kind
-from vfmodel.core._text import read_text_file
 from vfmodel.core.atomic import atomic_write_text
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.text import read_text_file
 from vfmodel.errors import InputError
 
 _TOUCHSTONE_RE = re.compile(r"^\.(s(\d+)p|ts)$", re.IGNORECASE)

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
 
 from vfmodel.detective.problem import Candidate, Family, log_residual
+from vfmodel.greybox.lsq import fit_log, log_covariance, log_start
 from vfmodel.greybox.params import ParamSet
 
 __all__ = ["FitResult", "evaluate", "refit"]
@@ -91,19 +91,16 @@ def evaluate(family: Family, applied: Sequence[Candidate], params: ParamSet) -> 
 
 
 def _covariance(jac: ArrF) -> tuple[ArrF, ArrF]:
-    """Standard deviations and correlation of the parameters from ``(J^T J)^+``."""
+    """Standard deviations and correlation of the parameters from ``(J^T J)^+``
+    (:func:`vfmodel.greybox.lsq.log_covariance`; an unseen direction: infinite std)."""
     k = jac.shape[1]
     if k == 0:
         return np.zeros(0), np.zeros((0, 0))
-    _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    keep = s > s[0] * 1e-12 if s.size and s[0] > 0 else np.zeros(s.size, bool)
-    cov = (vt[keep].T / s[keep] ** 2) @ vt[keep]
+    cov = log_covariance(jac, rcond=1e-12)
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    if np.any(~keep):
-        null = np.sum(vt[~keep] ** 2, axis=0) > 1e-6
-        std[null] = np.inf
+    finite = np.where(np.isfinite(cov), cov, 0.0)     # correlations of the seen directions
     with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(np.where(std > 0, std, 1.0), np.where(std > 0, std, 1.0))
+        corr = finite / np.outer(np.where(std > 0, std, 1.0), np.where(std > 0, std, 1.0))
     corr = np.nan_to_num(np.clip(corr, -1.0, 1.0))
     return std, corr
 
@@ -118,8 +115,7 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
     """
     applied = tuple(applied)
     names = tuple(family.free_names(applied, params) if names is None else names)
-    lo, hi = params.log_bounds(names)
-    x0 = np.clip(params.to_log(names), lo, hi)
+    x0, lo, hi = log_start(params, names)
     sel = slice(None) if rows is None else rows
 
     def fun(x: ArrF) -> ArrF:
@@ -140,8 +136,8 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
         return np.stack(cols, axis=1) if cols else np.zeros((r0.size, 0))
 
     if names:
-        res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf",
-                            max_nfev=max_nfev, xtol=1e-8, ftol=1e-8, x_scale="jac")
+        res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-8, ftol=1e-8,
+                      x_scale="jac")
         x = res.x
         jm = jac(x)
     else:

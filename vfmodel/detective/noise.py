@@ -14,13 +14,11 @@ estimate from second differences of ``log H`` on the frequency grid (noise of va
 ``6 sigma^2``; the median absolute deviation ignores the few resonances) guards against
 a black-box fit that could not follow the data (then its residual is not noise): the
 black-box value is used unless it exceeds the second-difference one by more than
-``mismatch`` (then the latter is used). Transfers (H1 estimates): the standard deviation
-follows from the coherence, ``var H1 ~ (1 - coh^2) |H|^2 / (2 n_d coh^2)``.
+``mismatch`` (then the latter is used).
 
 References
 ----------
 B. Gustavsen, A. Semlyen, IEEE Trans. Power Delivery 14(3), 1999. doi:10.1109/61.772353
-J. S. Bendat, A. G. Piersol, *Random Data*, 4th ed., Wiley, 2010, eq. (9.90).
 G. A. F. Seber, C. J. Wild, *Nonlinear Regression*, Wiley, 1989, sec. 5.3 (F test).
 """
 
@@ -37,7 +35,7 @@ from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.signals.spectral import log_noise_sigma
 
-__all__ = ["SpectrumNoise", "h1_sigma", "second_difference_sigma", "spectrum_noise"]
+__all__ = ["SpectrumNoise", "spectrum_noise"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
@@ -52,11 +50,6 @@ class SpectrumNoise:
     sigma_blackbox: float | None
     sigma_second_difference: float
     blackbox: RationalModel | None
-
-
-def second_difference_sigma(values: ArrC) -> float:
-    """Noise std of ``Re/Im log H`` from second differences (floored at 1e-6)."""
-    return log_noise_sigma(values, floor=1e-6)
 
 
 def _log_rss(model: RationalModel, f: ArrF, h: ArrC) -> tuple[float, int]:
@@ -74,7 +67,7 @@ def spectrum_noise(freq_hz: ArrF, values: ArrC, *, mismatch: float = 1.5,
 
     f = np.asarray(freq_hz, dtype=float)
     h = np.asarray(values, dtype=complex)
-    s2 = second_difference_sigma(h)
+    s2 = log_noise_sigma(h, floor=1e-6)        # second differences of log H
     bb: RationalModel | None = None
     s_bb: float | None = None
     m = 2 * f.size
@@ -106,10 +99,3 @@ def spectrum_noise(freq_hz: ArrF, values: ArrC, *, mismatch: float = 1.5,
     if s_bb is not None and np.isfinite(s_bb) and s_bb <= mismatch * s2:
         return SpectrumNoise(max(s_bb, 1e-6), "blackbox", s_bb, s2, bb)
     return SpectrumNoise(s2, "second_difference", s_bb, s2, bb)
-
-
-def h1_sigma(h: ArrC, coherence: ArrF, n_averages: int) -> ArrF:
-    """Standard deviation of ``|H1|`` relative to ``|H1|`` (random error of the estimate),
-    ``sqrt((1 - coh^2) / (2 n_d coh^2))`` (Bendat & Piersol eq. 9.90)."""
-    c2 = np.clip(np.asarray(coherence, dtype=float) ** 2, 1e-12, 1.0)
-    return np.sqrt((1 - c2) / (2 * max(n_averages, 1) * c2)) * np.ones_like(np.abs(h))

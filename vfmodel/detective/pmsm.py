@@ -13,7 +13,7 @@ Channels (the data the detective compares with):
   from a black-box rational fit (:func:`vfmodel.detective.noise.spectrum_noise`);
 - ``bearing:<rpm>rpm:<phase>``: the H1 transfer from each terminal voltage to the bearing
   voltage at each recorded speed, the model's output passed through the same estimator as
-  the measurement (paper eq. 21, :class:`vfmodel.greybox._objective.BearingTerm`); noise:
+  the measurement (paper eq. 21, :class:`vfmodel.greybox.objective.BearingTerm`); noise:
   the random error of the H1 estimate from the coherence (no model-error floor).
 
 Parameters: the machine parameters of the standstill network (shared by every channel)
@@ -24,7 +24,7 @@ per speed). The standstill spectra and the 0 rpm recording share the base lubric
 shorted at standstill).
 
 Jacobians are analytic (adjoint MNA sensitivities chained through the H1 estimator, see
-:mod:`vfmodel.greybox._objective`); :func:`vfmodel.detective.fit.refit` uses
+:mod:`vfmodel.greybox.objective`); :func:`vfmodel.detective.fit.refit` uses
 :meth:`PmsmFamily.residual_jacobian` instead of forward differences.
 """
 
@@ -44,18 +44,7 @@ from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.errors import InputError
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import (
-    BearingTerm,
-    ImpedanceTerm,
-    LogMap,
-    PreparedRecording,
-    bearing_term,
-    impedance_term,
-    log_map,
-    prepare_recording,
-)
-from vfmodel.greybox.assembly import PHASES
+from vfmodel.greybox.assembly import PHASES, default_params, lubricant_names
 from vfmodel.greybox.effects import (
     ALL_EFFECTS,
     EFFECT_LOCATIONS,
@@ -65,9 +54,19 @@ from vfmodel.greybox.effects import (
 from vfmodel.greybox.identify import (
     bearing_state,
     identify,
-    lubricant_names,
     machine_names,
     thin_spectra,
+)
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import (
+    BearingTerm,
+    ImpedanceTerm,
+    LogMap,
+    PreparedRecording,
+    bearing_term,
+    impedance_term,
+    log_map,
+    prepare_recording,
 )
 from vfmodel.greybox.params import ParamSet, ParamSpec
 
@@ -80,8 +79,7 @@ LOCATIONS = EFFECT_LOCATIONS
 """Where in the network each effect applies (the ``location`` of a finding)."""
 
 # every speed-dependent name of any structure (per-speed copies exist for all of them)
-_LUB_ALL = ("lubricant.R_1", "lubricant.C_1", "lubricant.R_2", "lubricant.C_2",
-            "lubricant.k_d", "lubricant.tau_d", "bearing.R_h", "bearing.C_edge")
+_LUB_ALL = lubricant_names(default_params())
 # start values of a candidate's multistart: (parameter, values spread over the band)
 _STARTS: dict[str, tuple[str, tuple[float, ...]]] = {
     "winding_skin_effect": ("winding.skin_l_frac", (0.02, 0.1, 0.4)),
@@ -294,20 +292,13 @@ class PmsmFamily:
 
 
 BEARING_F_MAX_HZ = 2e6
-"""Upper end of the bearing H1 band the detective tests. Above it the spectrum of the PWM
-edges (t_r ~ 50 ns: corner ~ 1/(pi t_r) ~ 6 MHz, falling 40 dB/decade above) approaches
-the probe noise floor, and H1 is biased low by the noise on the measured inputs (errors in
-the variables: ``H1 = H (I - G_nn G_xx^-1)``), which can be modelled only on a periodic
-record; a bias the noise model does not hold would be reported as missing physics."""
+"""Upper end of the bearing H1 band the detective tests (why: ``docs/notes.md``, "Detective:
+bearing band and bin step")."""
 
 
 BEARING_BIN_STEP = 2
-"""The detective tests every second H1 bin. The statistics of :mod:`.locate` assume
-independent points, but the DFTs of one Hann-windowed noise segment at neighbouring bins
-are correlated (coefficient -2/3 at one bin, 1/6 at two, 0 beyond); the whitened H1
-residual of the null case ``pmsm_null`` showed lag-1 autocorrelations of 0.14-0.60 per
-bearing channel (impedance channels: |rho| < 0.15), enough to turn a 1e-3 false-alarm level
-into false findings (a 3.2-sigma band on an unseen null case)."""
+"""The detective tests every second H1 bin (why: ``docs/notes.md``, "Detective: bearing
+band and bin step")."""
 
 
 def _bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,

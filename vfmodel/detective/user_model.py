@@ -244,7 +244,7 @@ def _check_topology(elements: list[tuple[str, str, str, str, float, str | None]]
 
 def read_user_model(path: str | Path) -> UserModel:
     """Read and parse a model file."""
-    from vfmodel.core._text import read_text_file
+    from vfmodel.core.text import read_text_file
 
     return parse_user_model(read_text_file(Path(path), "model"), str(path))
 

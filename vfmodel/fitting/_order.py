@@ -35,6 +35,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
+from vfmodel.fitting import _relocate
 from vfmodel.fitting import _vf_core as core
 
 NOISE_MARGIN = 1.25  # stop when the weighted error is within this factor of the floor
@@ -216,7 +217,7 @@ def auto_order(
     why = ""
     stall = n_gain = 0
     while True:
-        res = core.iterate(
+        res = _relocate.iterate(
             prob,
             reps,
             max_iterations=_GROW_ITERATIONS,
@@ -266,7 +267,7 @@ def auto_order(
     for _ in range(_REDUCE_TRIALS):  # one pole less, re-seeded and relocated
         if coef.reps.size <= 1:
             break
-        trial = core.iterate(
+        trial = _relocate.iterate(
             prob,
             _reseed(_one_pole_less(prob, coef.reps, w_lo), w_lo),
             max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
@@ -283,7 +284,7 @@ def auto_order(
         coef, converged = _backward_prune(prob, trial.coef, limit), trial.converged
     if not converged:  # no lower order was accepted: relocate the pruned model
         now = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
-        final = core.iterate(
+        final = _relocate.iterate(
             prob,
             coef.reps,
             max_iterations=max_iterations,

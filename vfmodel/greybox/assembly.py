@@ -33,7 +33,7 @@ from vfmodel._choices import BearingState, Topology, check_choice
 from vfmodel.circuit.mna import CircuitTransfer
 from vfmodel.circuit.netlist import Circuit, Element
 from vfmodel.errors import InputError
-from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.effects import EFFECT_INFO, PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet, ParamSpec
 from vfmodel.greybox.substructures import (
     bearing,
@@ -47,13 +47,14 @@ __all__ = [
     "BEARING_NODE",
     "PHASES",
     "SOURCES",
+    "SPEED_GROUPS",
     "TOPOLOGY_PORTS",
-    "bearing_capacitance",
     "bearing_transfer",
     "build_network",
     "default_params",
-    "divider_capacitances",
     "element_values",
+    "lubricant_names",
+    "network_values",
     "param_specs",
     "topology_impedance",
     "with_terminal_sources",
@@ -118,8 +119,10 @@ def param_specs() -> tuple[ParamSpec, ...]:
         _s("ball.L_int", 10e-9, 1e-11, 1e-5, "bearing", "H", "ball internal inductance"),
         _s("ball.rho", 4.0, 1.2, 100.0, "bearing", "", "ladder ratio"),
         _s("bearing.C_air", 100e-12, 1e-13, 1e-8, "bearing", "F", "air capacitance"),
-        _s("bearing.R_h", 0.5, 1e-3, 1e3, "bearing", "ohm", "Hertzian-contact resistance"),
-        _s("bearing.C_edge", 1e-9, 1e-12, 1e-7, "bearing", "F", "Hertzian edge capacitance"),
+        _s("bearing.R_h", 0.5, 1e-3, 1e3, "bearing.contact", "ohm",
+           "Hertzian-contact resistance"),
+        _s("bearing.C_edge", 1e-9, 1e-12, 1e-7, "bearing.contact", "F",
+           "Hertzian edge capacitance"),
         _s("lubricant.R_1", 5e4, 1.0, 1e9, "lubricant", "ohm", "base-oil film resistance"),
         _s("lubricant.C_1", 20e-9, 1e-11, 1e-6, "lubricant", "F", "base-oil film capacitance"),
         _s("lubricant.R_2", 1e3, 1e-2, 1e7, "lubricant", "ohm", "thickener layer resistance"),
@@ -134,6 +137,24 @@ def param_specs() -> tuple[ParamSpec, ...]:
 def default_params() -> ParamSet:
     """:func:`param_specs` at their nominal values."""
     return ParamSet.from_specs(param_specs())
+
+
+SPEED_GROUPS = ("lubricant", "bearing.contact")
+"""Parameter groups that change with speed: the lubricant film and the Hertzian contact
+(contact resistance, edge capacitance). Identification fits them per speed."""
+
+
+def lubricant_names(params: ParamSet, effects: Iterable[str] | None = None
+                    ) -> tuple[str, ...]:
+    """Speed-dependent parameters of ``params`` (groups :data:`SPEED_GROUPS`, in group order,
+    each in definition order): the film layers, contact resistance and edge capacitance.
+    With ``effects``, parameters that exist only with an effect not in it are left out."""
+    absent: set[str] = set()
+    if effects is not None:
+        eff = set(effects)
+        absent = {n for e, info in EFFECT_INFO.items() if e not in eff for n in info.params}
+    return tuple(n for g in SPEED_GROUPS for s in params.specs
+                 if s.group == g and (n := s.name) not in absent)
 
 
 def _pget(params: ParamSet | Mapping[str, float]) -> Mapping[str, float]:
@@ -171,6 +192,26 @@ def build_network(params: ParamSet | Mapping[str, float],
     sources : bool
         Add unit voltage sources ``src.U``, ``src.V``, ``src.W`` from each terminal to frame.
     """
+    els = _elements(params, effects, state, n_rungs, n_sections)
+    circ = Circuit(elements=tuple(els), title="vfmodel grey-box PMSM bearing-voltage network")
+    return with_terminal_sources(circ) if sources else circ
+
+
+def network_values(params: ParamSet | Mapping[str, float],
+                   effects: Iterable[str] = PAPER_EFFECTS,
+                   state: BearingState = "standstill", *, n_rungs: int = 3,
+                   n_sections: int = 2) -> NDArray[np.float64]:
+    """Element values of :func:`build_network` in the order of its ``param_values`` (the
+    terminal sources are not parameters), without building and checking a new netlist:
+    for a network compiled once (``MnaSystem``), whose solves check the values. Same
+    numbers as ``build_network(...).param_values``, without the netlist checks."""
+    els = _elements(params, effects, state, n_rungs, n_sections)
+    return np.array([el.value for el in els if el.is_parameter], dtype=float)
+
+
+def _elements(params: ParamSet | Mapping[str, float], effects: Iterable[str],
+              state: BearingState, n_rungs: int, n_sections: int) -> list[Element]:
+    """The elements of :func:`build_network` (without terminal sources)."""
     eff = check_effects(effects)
     check_choice("state", state, BearingState)
     if isinstance(n_sections, bool) or not isinstance(n_sections, int | np.integer) \
@@ -224,8 +265,7 @@ def build_network(params: ParamSet | Mapping[str, float],
             edge="hertzian_edge_capacitance" in eff, c_edge=v["bearing.C_edge"],
             metallic="metallic_contact" in eff, closed=state == "standstill",
             n_rungs=n_rungs)
-    circ = Circuit(elements=tuple(els), title="vfmodel grey-box PMSM bearing-voltage network")
-    return with_terminal_sources(circ) if sources else circ
+    return els
 
 
 def with_terminal_sources(circuit: Circuit) -> Circuit:
@@ -280,57 +320,3 @@ def bearing_transfer(params: ParamSet | Mapping[str, float],
     c = build_network(params, effects, state, n_rungs=n_rungs, n_sections=n_sections,
                       sources=True)
     return CircuitTransfer(c.mna, SOURCES, (BEARING_NODE,), method)  # type: ignore[arg-type]
-
-
-def divider_capacitances(params: ParamSet | Mapping[str, float],
-                         effects: Iterable[str] = PAPER_EFFECTS) -> dict[str, float]:
-    """Low-frequency capacitances of the conventional divider model (paper Fig. 1, eq. 1).
-
-    ``c_wr`` (all three phases), ``c_rf`` (air gap), ``c_b`` (one bearing: series film
-    layers plus edge and air capacitance, each insulation value including its dielectric
-    branch ``(1 + k_d)`` when enabled) and ``bvr = c_wr / (c_wr + c_rf + 2 c_b)``, valid in
-    the rotating state between the film's RC corner and the first resonance.
-    """
-    eff = check_effects(effects)
-    v = _pget(params)
-    kd = 1 + v["insulation.k_d"] if "insulation_dielectric_loss" in eff else 1.0
-    c_wr = 3 * v["insulation.C_wr"] * kd
-    c_rf = v["airgap.C_rf"] * kd
-    c1 = v["lubricant.C_1"] * (1 + v["lubricant.k_d"]
-                               if "lubricant_dielectric_loss" in eff else 1.0)
-    film = c1 * v["lubricant.C_2"] / (c1 + v["lubricant.C_2"]) \
-        if "lubricant_two_layer" in eff else c1
-    c_b = film + v["bearing.C_air"] + (v["bearing.C_edge"]
-                                       if "hertzian_edge_capacitance" in eff else 0.0)
-    return {"c_wr": c_wr, "c_rf": c_rf, "c_b": c_b, "bvr": c_wr / (c_wr + c_rf + 2 * c_b)}
-
-
-BEARING_C_REF_HZ = 100e3
-"""Frequency of :func:`bearing_capacitance`: inside the plateau band (the capacitive
-divider after each edge), above the film's RC corner and below the ringing."""
-
-
-def bearing_capacitance(params: ParamSet | Mapping[str, float],
-                        effects: Iterable[str] = PAPER_EFFECTS,
-                        state: BearingState = "rotating",
-                        freq_hz: float = BEARING_C_REF_HZ) -> float:
-    """Effective capacitance ``Im(Y) / (2 pi f)`` of one bearing between shaft and frame at
-    ``freq_hz`` (film layers, contact, balls, edge and air capacitance together).
-
-    Unlike :func:`divider_capacitances` (``c_b``: capacitances added by hand) this is the
-    network's own admittance, so it is defined for any bearing structure (e.g. inner and
-    outer race contacts, a conducting thickener layer) and comparable between them.
-    """
-    eff = check_effects(effects)
-    v = _pget(params)
-    els = bearing(
-        "b", "S", "0", c_air=v["bearing.C_air"], ball_r=v["ball.R_dc"],
-        ball_l_ext=v["ball.L_ext"], ball_l_int=v["ball.L_int"], ball_rho=v["ball.rho"],
-        ball_skin="ball_skin_effect" in eff, r_h=v["bearing.R_h"], r_1=v["lubricant.R_1"],
-        c_1=v["lubricant.C_1"], two_layer="lubricant_two_layer" in eff, r_2=v["lubricant.R_2"],
-        c_2=v["lubricant.C_2"], lub_loss="lubricant_dielectric_loss" in eff,
-        k_d=v["lubricant.k_d"], tau_d=v["lubricant.tau_d"],
-        edge="hertzian_edge_capacitance" in eff, c_edge=v["bearing.C_edge"],
-        metallic="metallic_contact" in eff, closed=state == "standstill")
-    z = Circuit(elements=tuple(els)).port_impedance([freq_hz], [("S", "0")])[0, 0, 0]
-    return float((1.0 / z).imag / (2 * np.pi * freq_hz))

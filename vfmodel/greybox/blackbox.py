@@ -35,7 +35,7 @@ from vfmodel.fitting.vectfit import vector_fit
 from vfmodel.greybox.identify import Identification
 from vfmodel.greybox.metrics import band_mape_pct
 
-__all__ = ["BANDS_HZ", "BlackBoxComparison", "compare_blackbox", "nearest_distance"]
+__all__ = ["BANDS_HZ", "BlackBoxComparison", "compare_blackbox"]
 
 BANDS_HZ = (1e3, 1e4, 1e5, 1e6, 1e7)
 ArrC = NDArray[np.complex128]
@@ -83,14 +83,6 @@ def _fit(data: FrequencyData) -> RationalModel | None:
     except (FitError, InputError):
         return None
     return model
-
-
-def nearest_distance(poles: ArrC, reference: ArrC) -> NDArray[np.float64]:
-    """For each pole, the relative distance ``|p - q| / |p|`` to the nearest reference pole."""
-    if reference.size == 0:
-        return np.full(poles.size, np.inf)
-    d = np.abs(poles[:, None] - reference[None, :]).min(axis=1)
-    return np.asarray(d / np.maximum(np.abs(poles), 1e-300), dtype=float)
 
 
 def compare_blackbox(ident: Identification, *, bands_hz: tuple[float, ...] = BANDS_HZ,

@@ -3,12 +3,12 @@
 Stages (each a bounded nonlinear least-squares problem in ``x = log(parameter)``, solved by
 scipy's trust-region-reflective method; Jacobians: adjoint MNA sensitivities chained with
 the parameter-to-element map for the spectra, adjoint or forward differences for the H1
-transfer, see :mod:`._objective`):
+transfer, see :mod:`.objective`):
 
 1. ``impedance, n sections`` - condition 1 alone: every machine parameter (winding,
    insulation, frame, shaft, balls, bearing air capacitance) from the CM/DM impedance
    spectra, from a start scaled to the low-frequency data (:func:`initial_params`). The
-   winding discretisation (sections per phase, :mod:`._network`; 2 = the paper's model) is
+   winding discretisation (sections per phase, :mod:`.network`; 2 = the paper's model) is
    a model-order choice: candidates are fitted in increasing order while the reduced
    chi-square keeps falling by more than ``min_gain``, and the best is kept. Optional
    multistart (``n_starts``).
@@ -19,7 +19,7 @@ transfer, see :mod:`._objective`):
    noise level (SNR ~1 dB) and the terminal spectrum near 10 MHz only a few dB above the
    probe noise, so the H1 residual is whitened with the full covariance of the H1 estimate
    and the model's H1 carries the bias that the input noise causes in the measured one
-   (:func:`vfmodel.greybox._objective.bearing_term`, ``weighting="covariance"``,
+   (:func:`vfmodel.greybox.objective.bearing_term`, ``weighting="covariance"``,
    ``input_noise=True``);
 3. ``lubricant <rpm>`` - condition 2 at each rotating speed with every other parameter
    fixed: the lubricant film (``lubricant.*``), the Hertzian-contact resistance and the edge
@@ -52,15 +52,24 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
 
 from vfmodel._choices import BearingState
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import (
+from vfmodel.greybox.assembly import default_params, lubricant_names
+from vfmodel.greybox.bearing import (
+    average_bvr,
+    c_b_from_bvr,
+    common_mode,
+    divider_capacitances,
+)
+from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.joint import SHARED, SpeedCopy, extend, speed_params, tag
+from vfmodel.greybox.lsq import fit_log, log_covariance, log_start
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import (
     BearingTerm,
     H1Weighting,
     ImpedanceTerm,
@@ -71,24 +80,21 @@ from vfmodel.greybox._objective import (
     log_map,
     prepare_recording,
 )
-from vfmodel.greybox.assembly import default_params, divider_capacitances
-from vfmodel.greybox.bvr_baseline import average_bvr, common_mode
-from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
-from vfmodel.greybox.joint import SHARED, SpeedCopy, extend, speed_params, tag
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
+    "JOINT_TRIGGER",
     "STANDSTILL_HIDDEN",
     "Identification",
     "RotatingFit",
     "SpeedFit",
     "StageReport",
     "bearing_state",
-    "film_equivalent",
     "fit_stage",
     "identify",
     "initial_params",
+    "joint_stage",
     "log_interval",
     "lubricant_names",
     "machine_names",
@@ -100,6 +106,10 @@ Term = ImpedanceTerm | BearingTerm | RecordTerm
 RotatingFit = Literal["record", "h1"]
 """Condition 2 at the rotating speeds: output-error fit of the whole record
 (:mod:`vfmodel.greybox.record_fit`, default) or the H1 transfer (paper eq. 21)."""
+
+JOINT_TRIGGER = 10.0
+"""Reduced chi-square of a rotating record's lubricant stage from which the joint refit
+runs (:func:`joint_stage`): the record misfit is then at least ~3x its noise RMS."""
 
 STANDSTILL_HIDDEN = ("airgap.C_rf", "bearing.C_air")
 """Parameters the standstill data cannot separate: with the metallic contact closed the
@@ -163,20 +173,6 @@ def bearing_state(speed_rpm: float, effects: Iterable[str]) -> BearingState:
     return "standstill" if speed_rpm <= 0 and "metallic_contact" in set(effects) else "rotating"
 
 
-def lubricant_names(params: ParamSet, effects: Iterable[str]) -> tuple[str, ...]:
-    """Speed-dependent parameters: the film layers, contact resistance and edge capacitance."""
-    eff = set(effects)
-    out = ["lubricant.R_1", "lubricant.C_1"]
-    if "lubricant_two_layer" in eff:
-        out += ["lubricant.R_2", "lubricant.C_2"]
-    if "lubricant_dielectric_loss" in eff:
-        out += ["lubricant.k_d", "lubricant.tau_d"]
-    out.append("bearing.R_h")
-    if "hertzian_edge_capacitance" in eff:
-        out.append("bearing.C_edge")
-    return tuple(n for n in out if n in params)
-
-
 def machine_names(params: ParamSet, spec: NetSpec) -> tuple[str, ...]:
     """Parameters of the standstill network that change it (others are dropped)."""
     eff = spec.effects
@@ -188,22 +184,6 @@ def machine_names(params: ParamSet, spec: NetSpec) -> tuple[str, ...]:
     if "fixture_inductance" in eff and "fixture.L" in params:
         keep.append("fixture.L")
     return tuple(keep)
-
-
-def film_equivalent(params: ParamSet, effects: Iterable[str]) -> dict[str, float]:
-    """Equivalent lubricant-film R and C of one bearing (``results.json`` ``lubricant``).
-
-    ``r_ohm``: DC resistance of the film, ``R_1 (+ R_2)`` (layers in series; the loss branch
-    carries no DC). ``c_f``: its capacitance above the RC corners, ``C_1 (1 + k_d)`` in
-    series with ``C_2`` (two-layer film), the film part of the paper's ``C_b``.
-    """
-    eff = set(effects)
-    dc = divider_capacitances(params, eff)
-    c_film = dc["c_b"] - params["bearing.C_air"] - (
-        params["bearing.C_edge"] if "hertzian_edge_capacitance" in eff else 0.0)
-    r = params["lubricant.R_1"] + (params["lubricant.R_2"] if "lubricant_two_layer" in eff
-                                   else 0.0)
-    return {"r_ohm": float(r), "c_f": float(c_film)}
 
 
 def initial_params(spectra_term: ImpedanceTerm | None, base: ParamSet | None = None) -> ParamSet:
@@ -256,8 +236,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     its reported uncertainty is then about ``prior_sigma``.
     """
     names = tuple(names)
-    lo, hi = params.log_bounds(names)
-    x0 = np.clip(params.to_log(names), lo, hi)
+    x0, lo, hi = log_start(params, names)
     rcache: dict[bytes, ArrF] = {}
     jcache: dict[bytes, ArrF] = {}
     count = [0]
@@ -295,8 +274,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
         return jcache[key]
 
     progress(stage, 0, max_nfev)
-    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev,
-                        xtol=1e-7, ftol=1e-6)
+    res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-7, ftol=1e-6)
     progress(stage, max_nfev, max_nfev)
     r, jm = fun(res.x), jac(res.x)
     dof = max(r.size - len(names), 1)
@@ -309,26 +287,11 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
         cf = getattr(term, "correlation_factor", None)
         if callable(cf):
             infl = max(infl, float(cf(p_out)))
-    cov = _cov_log(jm, chi2 * infl)
+    cov = log_covariance(jm, chi2 * infl)
     rel = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return p_out, StageReport(
         stage, names, int(r.size), chi2, int(res.nfev), int(res.status),
         {n: float(s) for n, s in zip(names, rel, strict=True)}, cov, infl)
-
-
-def _cov_log(jac: ArrF, scale: float) -> ArrF:
-    """Covariance of ``log p``: ``scale (J^T J)^+`` (SVD pseudo-inverse); a direction the
-    data do not see at all gets an infinite variance on its diagonal."""
-    n = jac.shape[1]
-    if jac.size == 0:
-        return np.zeros((n, n))
-    _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    keep = s > s[0] * 1e-10
-    cov = (vt[keep].T / s[keep] ** 2) @ vt[keep] * scale
-    if np.any(~keep):
-        null = np.sum(vt[~keep] ** 2, axis=0) > 1e-6
-        cov[null, null] = np.inf
-    return np.asarray(cov, dtype=float)
 
 
 def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
@@ -378,7 +341,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     effects : iterable of Effect
         Effects of the model network (default: the full model of the paper).
     sections : sequence of int
-        Candidate numbers of winding sections per phase (:mod:`._network`; 2 is the paper's
+        Candidate numbers of winding sections per phase (:mod:`.network`; 2 is the paper's
         model). They are tried in increasing order on the impedance spectra; the next one
         is tried only while the previous one lowered the reduced chi-square by more than
         the fraction ``min_gain``, and the best is kept.
@@ -504,66 +467,97 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     rot = [f for f in fits if f.record is not None]
     if joint and rot:
         # shared rotor-side capacitances refitted with every record (greybox.joint)
-        shared = [n for n in SHARED if n in p.names]
-        ext = extend(p, lub, {f.speed_rpm: f.params for f in rot})
-        base = p.names
-        # each term weighted by its misfit at the end of its own stage (reduced chi-square,
-        # times the variance inflation of correlated waveform residuals): the model error
-        # is treated as noise, so 24k-sample records cannot outvote the spectra
-        def wgt(name: str, default: float = 1.0) -> float:
-            rep = next((st for st in reversed(stages) if st.name.startswith(name)), None)
-            if rep is None:
-                return default
-            return default / float(np.sqrt(max(rep.chi2_red, 1.0) * rep.corr_factor))
-
-        jterms: list[tuple[Term, float]] = []
+        machine: list[tuple[str, Term, float]] = []
         if imp is not None:
-            jterms.append((SpeedCopy(imp_fit, base, (), None),  # type: ignore[arg-type]
-                           wgt("impedance")))
+            machine.append(("impedance", imp_fit, 1.0))
         if stand:
-            jterms.append((SpeedCopy(fits[0].term, base, (), None),  # type: ignore[arg-type]
-                           wgt("standstill", weight_bearing)))
-        jterms += [(SpeedCopy(f.record, base, lub, f.speed_rpm),  # type: ignore[misc]
-                    wgt(f"lubricant {f.speed_rpm:g} rpm")) for f in rot]
-        jnames = shared + [n + tag(f.speed_rpm) for f in rot for n in lub]
-        ext_fit, jrep = fit_stage(jterms, ext, jnames, "joint (all speeds)",
-                                  max_nfev=max_nfev_joint, prior_sigma=prior_sigma,
-                                  progress=progress)
-
-        def misfit(term: Term, q: ParamSet) -> float:
-            r = term.residual(q)[0]
-            return float(r @ r)
-
-        # the machine stages' own data must not get worse: the joint result is kept only
-        # if the spectra and the standstill transfer fit within 10 % of their chi-square
-        machine_terms = jterms[: len(jterms) - len(rot)]
-        if all(misfit(t, ext_fit) <= 1.1 * misfit(t, ext) for t, _ in machine_terms):
+            machine.append(("standstill", fits[0].term, weight_bearing))
+        res = joint_stage(p, fits, stages, machine, lub, max_nfev=max_nfev_joint,
+                          prior_sigma=prior_sigma, progress=progress)
+        if res is not None:
+            p, fits, jrep = res
             stages.append(jrep)
-        else:
-            joint = False
-    if joint and rot:
-        p = ParamSet(tuple(ext_fit.spec(n) for n in base), tuple(ext_fit[n] for n in base))
-        idx = {n: i for i, n in enumerate(jnames)}
-        new_fits = [SpeedFit(f.speed_rpm, f.state, p, f.term, None) for f in fits
-                    if f.record is None]
-        for f in rot:
-            own = [n + tag(f.speed_rpm) for n in lub]
-            sel = [idx[n] for n in shared + own]
-            cov = None if jrep.cov_log is None else jrep.cov_log[np.ix_(sel, sel)]
-            names_b = tuple(shared) + lub
-            rep = StageReport(f"joint {f.speed_rpm:g} rpm", names_b, jrep.n_residuals,
-                              jrep.chi2_red, jrep.nfev, jrep.status,
-                              {n: float(np.sqrt(cov[k, k])) if cov is not None else 0.0
-                               for k, n in enumerate(names_b)}, cov, jrep.corr_factor)
-            new_fits.append(SpeedFit(f.speed_rpm, f.state,
-                                     speed_params(ext_fit, base, f.speed_rpm, lub),
-                                     f.term, rep, f.record))
-        fits = new_fits
-        rel = {**rel, **{n: jrep.rel_std[n] for n in shared}}
+            # the shared names the joint stage fitted (per-speed copies carry "@rpm")
+            rel = {**rel, **{n: v for n, v in jrep.rel_std.items() if "@" not in n}}
     fits.sort(key=lambda f: f.speed_rpm)
     if imp is not None and stand:
         imp = impedance_term(dataset.impedance, spec, p)
     return Identification(p, spec, imp, tuple(fits), tuple(stages), rel)
+
+
+def joint_stage(p: ParamSet, fits: Sequence[SpeedFit], stages: Sequence[StageReport],
+                machine: Sequence[tuple[str, Term, float]], lub: Sequence[str], *,
+                max_nfev: int = 25, prior_sigma: float = 1.0, gate: float = 1.1,
+                trigger: float = JOINT_TRIGGER, shared: Sequence[str] = SHARED,
+                progress: Progress = no_progress,
+                ) -> tuple[ParamSet, list[SpeedFit], StageReport] | None:
+    """Joint refit of the rotor-current path (:data:`.joint.SHARED`) with every rotating
+    record's lubricant (:mod:`.joint`); None when it is not needed or not kept.
+
+    ``machine``: the machine stages' terms as ``(stage name prefix, term, weight)`` (the
+    spectra first, then the standstill transfer). Needed only when a rotating record
+    rejects the stage-wise machine: its lubricant stage ended with a reduced chi-square of
+    at least ``trigger`` (the record misfit at least ``sqrt(trigger)`` times the noise RMS;
+    a record the stage-wise model fits to near its noise gives the joint refit nothing to
+    correct, only noise to chase). Each term is weighted by its misfit at the end of its
+    own stage (reduced chi-square times the variance inflation of correlated waveform
+    residuals): the model error is treated as noise, so 24k-sample records cannot outvote
+    the spectra. The result is kept only if the impedance spectra (the first machine term,
+    the most accurate data) fit within ``gate`` times their chi-square; the standstill
+    transfer is not gated: it is the term whose confusion of the winding-rotor capacitance
+    with the contact path the refit corrects.
+    """
+    rot = [f for f in fits if f.record is not None]
+    lub = tuple(lub)
+    rec_chi2 = [st.chi2_red for st in stages if st.name.startswith("lubricant")]
+    if not rot or not rec_chi2 or max(rec_chi2) < trigger:
+        return None
+    shared = [n for n in shared if n in p.names]
+    ext = extend(p, lub, {f.speed_rpm: f.params for f in rot})
+    base = p.names
+
+    def wgt(name: str, default: float = 1.0) -> float:
+        rep = next((st for st in reversed(stages) if st.name.startswith(name)), None)
+        if rep is None:
+            return default
+        return default / float(np.sqrt(max(rep.chi2_red, 1.0) * rep.corr_factor))
+
+    # the H1 transfer's Jacobian by the adjoint method: its forward differences would
+    # cost one full transfer of the standstill record per shared parameter
+    jterms: list[tuple[Term, float]] = [
+        (SpeedCopy(t, base, (), None,  # type: ignore[misc]
+                   "adjoint" if isinstance(t, BearingTerm) else None), wgt(name, w))
+        for name, t, w in machine]
+    jterms += [(SpeedCopy(f.record, base, lub, f.speed_rpm),  # type: ignore[misc]
+                wgt(f"lubricant {f.speed_rpm:g} rpm")) for f in rot]
+    jnames = shared + [n + tag(f.speed_rpm) for f in rot for n in lub]
+    ext_fit, jrep = fit_stage(jterms, ext, jnames, "joint (all speeds)", max_nfev=max_nfev,
+                              prior_sigma=prior_sigma, progress=progress)
+
+    def misfit(term: Term, q: ParamSet) -> float:
+        r = term.residual(q)[0]
+        return float(r @ r)
+
+    # the spectra must not get worse
+    if machine and machine[0][0] == "impedance" and \
+            misfit(jterms[0][0], ext_fit) > gate * misfit(jterms[0][0], ext):
+        return None
+    p_new = ParamSet(tuple(ext_fit.spec(n) for n in base), tuple(ext_fit[n] for n in base))
+    idx = {n: i for i, n in enumerate(jnames)}
+    new_fits = [SpeedFit(f.speed_rpm, f.state, p_new, f.term, None) for f in fits
+                if f.record is None]
+    for f in rot:
+        sel = [idx[n] for n in shared + [n + tag(f.speed_rpm) for n in lub]]
+        cov = None if jrep.cov_log is None else jrep.cov_log[np.ix_(sel, sel)]
+        names_b = tuple(shared) + lub
+        rep = StageReport(f"joint {f.speed_rpm:g} rpm", names_b, jrep.n_residuals,
+                          jrep.chi2_red, jrep.nfev, jrep.status,
+                          {n: float(np.sqrt(cov[k, k])) if cov is not None else 0.0
+                           for k, n in enumerate(names_b)}, cov, jrep.corr_factor)
+        new_fits.append(SpeedFit(f.speed_rpm, f.state,
+                                 speed_params(ext_fit, base, f.speed_rpm, lub),
+                                 f.term, rep, f.record))
+    return p_new, new_fits, jrep
 
 
 def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
@@ -574,8 +568,8 @@ def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
     dc = divider_capacitances(previous, effects)
     bvr = average_bvr(common_mode(prep.terminals), prep.bearing)
     if bvr > 0:
-        c_b = (dc["c_wr"] / bvr - dc["c_wr"] - dc["c_rf"]) / 2
-        if c_b > 0:
+        c_b, _ = c_b_from_bvr(bvr, dc["c_wr"], dc["c_rf"])
+        if c_b is not None and c_b > 0:
             k = c_b / dc["c_b"]
             upd = {n: previous[n] * k for n in ("lubricant.C_1", "lubricant.C_2",
                                                  "bearing.C_edge") if n in previous}

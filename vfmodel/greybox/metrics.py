@@ -37,10 +37,9 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from vfmodel.errors import InputError
-from vfmodel.signals.filters import brickwall_filter
+from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
 
 __all__ = [
-    "F_CUT_HZ",
     "band_mape_pct",
     "coherence_coefficient",
     "mape_pct",
@@ -48,9 +47,6 @@ __all__ = [
     "peak_v",
     "spectral_corr",
 ]
-
-F_CUT_HZ = 10e6
-"""Model bandwidth and brickwall cut-off (paper Sec. II-C)."""
 
 
 def _pair(model: ArrayLike, meas: ArrayLike, what: str) -> tuple[NDArray[np.complex128],

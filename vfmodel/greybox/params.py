@@ -32,7 +32,8 @@ class ParamSpec:
         Physical bounds, ``0 < lower <= nominal <= upper``.
     group : str
         Substructure group (``winding.U``, ``insulation``, ``frame``, ``shaft``, ``bearing``,
-        ``lubricant``, ``fixture``); identification stages select parameters by group.
+        ``bearing.contact``, ``lubricant``, ``fixture``); identification stages select
+        parameters by group (the speed-dependent ones: ``assembly.SPEED_GROUPS``).
     unit : str
     description : str
     """

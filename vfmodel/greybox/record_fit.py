@@ -54,18 +54,18 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState
 from vfmodel.circuit.mna import MnaSystem
-from vfmodel.greybox._fast import TransferMemo
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import (
+from vfmodel.circuit.transfer import TransferMemo
+from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import (
     LogMap,
     PreparedRecording,
-    _resample,
+    RecordTransfer,
     output_derivatives,
     steady_output,
-    values_of,
 )
-from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
 from vfmodel.greybox.params import ParamSet
+from vfmodel.signals.periodic import resample_periodic as _resample
 
 __all__ = ["RecordTerm", "record_term"]
 
@@ -77,7 +77,7 @@ _J_LOG_POINTS = 600     # ... then this many log-spaced points up to the cut-off
 
 
 @dataclass(frozen=True)
-class RecordTerm:
+class RecordTerm(RecordTransfer):
     """Output-error term of one prepared recording (see the module docstring)."""
 
     prep: PreparedRecording
@@ -97,16 +97,6 @@ class RecordTerm:
     @property
     def n_residuals(self) -> int:
         return int(self.window.stop - self.window.start)
-
-    def transfer_bins(self, params: ParamSet) -> ArrC:
-        """Network transfer (n_bins, 1, 3) on the record's FFT bins (the last one is kept:
-        the Jacobian at the point just evaluated reuses it)."""
-        v = values_of(params, self.spec, self.state, sources=True)
-        return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
-
-    def output(self, params: ParamSet) -> ArrF:
-        """Modelled bearing voltage at the full rate (periodic response, filtered inputs)."""
-        return steady_output(self.transfer_bins(params), self.prep)
 
     def _project(self, d: ArrF) -> ArrF:
         """Remove the transient basis from (..., n_window) differences."""

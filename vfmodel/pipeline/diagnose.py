@@ -119,7 +119,7 @@ def bearing_windows(family: Family, fit: FitResult, speeds: Iterable[str] | None
     """Time windows of the bearing-voltage records where ``fit`` disagrees beyond the noise
     (only the records named in ``speeds``, e.g. ``"bearing:100rpm"``; default all)."""
     from vfmodel.detective.windows import noise_variance, time_windows
-    from vfmodel.greybox._objective import F_CUT_HZ
+    from vfmodel.signals.filters import F_CUT_HZ
 
     outputs = getattr(family, "outputs", None)
     preps = getattr(family, "preps", ())

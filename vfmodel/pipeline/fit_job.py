@@ -27,7 +27,7 @@ from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
-from vfmodel.fitting.vectfit import FitReport, fit_errors, point_errors, vector_fit
+from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
 
 
 @dataclass(frozen=True)
@@ -226,8 +226,6 @@ def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
     impedance, points, frequency range and spacing, size range of ||H(f)||_F, the noise
     estimate (relative, as the automatic order sees it), export artifacts and, for square
     Z/Y/S data, the passivity violation floor (active or not)."""
-    from vfmodel.fitting import _order, _vf_core
-
     f = data.freq_hz
     pos = f[f > 0]
     norm = np.linalg.norm(data.values.reshape(data.n_freq, -1), axis=1)
@@ -236,13 +234,7 @@ def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
         lin = np.ptp(np.diff(pos)) <= 1e-6 * pos[-1]
         spacing = "linear" if lin else ("logarithmic" if np.ptp(np.diff(np.log(pos)))
                                          <= 1e-6 else "irregular")
-    noise = None
-    if data.n_freq >= 16 and float(np.max(norm)) > 0:
-        w = 1.0 / np.maximum(norm, 1e-12 * float(np.max(norm)))
-        prob = _vf_core.Problem(1j * f / max(f[-1], 1e-300) + 0j,
-                                data.values.reshape(data.n_freq, -1), w[:, None],
-                                True, False, None)
-        noise = _order.estimate_noise(prob)
+    noise = data_noise(data)
     art = find_artifacts(data) if data.n_freq >= 3 else None
     dp = data_passivity(data)
     return {
@@ -262,3 +254,34 @@ def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
         "worst_violation": None if dp is None else dp.worst_violation,
         "active": None if dp is None else dp.active,
     }
+
+
+def fit_model_json(res: FitJobResult, sources: list[str]) -> dict[str, Any]:
+    """The ``model.json`` document of ``vfmodel fit`` (CONTRACT section 4): the model, its
+    fit errors and passivity status, the passivity details when checked, the order reason
+    and the source files."""
+    from vfmodel.fitting.model_json import model_to_json, passivity_to_json
+
+    f = res.data.freq_hz
+    obj = model_to_json(res.model, res.fit, (float(f[0]), float(f[-1])),
+                        None if res.passivity is None else res.passivity.passive)
+    if res.passivity is not None:
+        obj["passivity"] = passivity_to_json(res.passivity, res.unconstrained_rel_rms_error,
+                                             res.data_passivity)
+    obj["order_reason"] = res.fit.order_reason
+    obj["sources"] = list(sources)
+    return obj
+
+
+def fit_spice_text(res: FitJobResult, subckt_name: str) -> str:
+    """SPICE subcircuit ``subckt_name`` of the fitted model (``fit --spice``); a model with
+    a common delay is the rational part behind matched lossless lines."""
+    from vfmodel.circuit.spice_export import delayed_subckt
+    from vfmodel.circuit.synthesis import model_to_spice
+
+    if res.model.delay:
+        inner = f"{subckt_name}_rational"
+        return delayed_subckt(model_to_spice(res.model.without_delay(), name=inner),
+                              inner, subckt_name, res.model.n_in,
+                              float(res.model.z0 or 50.0), res.model.delay)
+    return model_to_spice(res.model, name=subckt_name)

@@ -4,7 +4,7 @@ The model is a netlist written by ``reproduce`` (``network_<rpm>rpm.cir``: nodes
 ``V``, ``W``, frame ``0`` and ``SN``). The excitation is either a recording (its terminal
 voltages, filtered to 10 MHz; the response is the periodic steady state of the record, as
 in the identification) or an inverter description (two-level PWM inverter and cable of
-:mod:`vfmodel.greybox.bench`, periodic steady state of the whole drive with the model
+:mod:`vfmodel.greybox.drive`, periodic steady state of the whole drive with the model
 network as the machine).
 """
 
@@ -18,13 +18,14 @@ import scipy.fft as sfft
 from numpy.typing import NDArray
 
 from vfmodel.circuit.netlist import Circuit
+from vfmodel.circuit.transfer import transfer_on
 from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
-from vfmodel.greybox._fast import transfer_on
 from vfmodel.greybox.assembly import BEARING_NODE, PHASES, SOURCES, with_terminal_sources
-from vfmodel.greybox.bench import CableSpec, InverterSpec, ScopeSpec, steady_state
-from vfmodel.greybox.metrics import F_CUT_HZ, peak_errors, peak_v, spectral_corr
-from vfmodel.signals.filters import brickwall_filter
+from vfmodel.greybox.drive import CableSpec, InverterSpec, ScopeSpec, steady_state
+from vfmodel.greybox.metrics import peak_errors, peak_v, spectral_corr
+from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
+from vfmodel.signals.periodic import periodic_response
 
 __all__ = ["Prediction", "check_inverter_options", "check_model_nodes", "inverter_options",
            "predict_inverter", "predict_recording"]
@@ -77,9 +78,7 @@ def predict_recording(model: Circuit, rec: Recording) -> Prediction:
     b = mna.input_matrix(list(SOURCES))
     cout = mna.output_matrix([BEARING_NODE])
     h = transfer_on(mna, b, cout, mna.values0, freq[sel])
-    spec = np.zeros(freq.size, complex)
-    spec[sel] = np.einsum("fi,if->f", h[:, 0, :], sfft.rfft(x, axis=1)[:, sel])
-    u_b = np.asarray(sfft.irfft(spec, n=n), dtype=float)
+    u_b = periodic_response(h, sfft.rfft(x, axis=1)[:, sel], n)[0]
     meas = brickwall_filter(rec.bearing, fs, F_CUT_HZ) if "u_B" in rec.channels else None
     return Prediction(fs, x, u_b, meas, _summary(fs, u_b, meas))
 

@@ -3,13 +3,13 @@
 identify the grey-box network (:func:`vfmodel.greybox.identify.identify`) -> validate it
 (impedance MAPE and coherence coefficient, bearing-voltage peak errors and spectral
 correlation per speed, :mod:`vfmodel.greybox.metrics`) -> the classical BVR model
-(:mod:`vfmodel.greybox.bvr_baseline`) -> black box vs grey box
+(:mod:`vfmodel.greybox.bearing`) -> black box vs grey box
 (:mod:`vfmodel.greybox.blackbox`) -> the identified network of each speed as an ngspice
 netlist. Returns values; writing files is the caller's (CLI) job.
 
 ``results.json`` holds the keys of CONTRACT section 6 (definitions in
 :mod:`vfmodel.greybox.metrics`) and more: ``bearing.<rpm>.lubricant`` is the equivalent
-film of one bearing (:func:`vfmodel.greybox.identify.film_equivalent`: ``r_ohm`` its DC
+film of one bearing (:func:`vfmodel.greybox.bearing.film_equivalent`: ``r_ohm`` its DC
 resistance, ``c_f`` its capacitance); at standstill the metallic contact shorts the film and
 both are reported as 0. ``residual_rms_v`` is the RMS of measured minus modelled bearing
 voltage (filtered): at standstill it is mostly measurement noise, and the measured peak
@@ -32,14 +32,20 @@ from vfmodel.circuit.spice_export import to_spice
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
-from vfmodel.greybox.assembly import bearing_capacitance, divider_capacitances
+from vfmodel.greybox.bearing import (
+    BvrBaseline,
+    bearing_capacitance,
+    bvr_baseline,
+    divider_capacitances,
+    film_equivalent,
+    predict_bvr,
+)
+from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
-from vfmodel.greybox.bvr_baseline import BvrBaseline, bvr_baseline, predict_bvr
 from vfmodel.greybox.effects import PAPER_EFFECTS
 from vfmodel.greybox.identify import (
     Identification,
     RotatingFit,
-    film_equivalent,
     identify,
     log_interval,
 )
@@ -52,7 +58,6 @@ from vfmodel.greybox.metrics import (
     spectral_corr,
 )
 from vfmodel.greybox.params import ParamSet
-from vfmodel.signals.h1 import bvr as bvr_estimate
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
 

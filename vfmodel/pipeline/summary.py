@@ -11,6 +11,7 @@ from scipy import signal
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
+from vfmodel.signals.filters import F_CUT_HZ
 from vfmodel.signals.spectral import log_noise_sigma
 
 
@@ -36,7 +37,7 @@ def floor_snr_db(x: NDArray[np.float64], fs: float) -> float:
     return float(10 * np.log10((total - noise) / noise))
 
 
-def coherence_snr_db(rec: Recording, f_max_hz: float = 10e6) -> float:
+def coherence_snr_db(rec: Recording, f_max_hz: float = F_CUT_HZ) -> float:
     """SNR of the bearing voltage from the multiple coherence with the terminal voltages.
 
     With gamma^2 the multiple coherence, the part of the output PSD explained by the inputs

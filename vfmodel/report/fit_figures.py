@@ -47,22 +47,3 @@ def plot_fit(data: FrequencyData, model: RationalModel, path: Path, title: str =
     for ax in (ax_m, ax_p):
         ax.grid(True, which="both", alpha=0.3)
     save(fig, path)
-
-
-def plot_poles(model: RationalModel, path: Path, other: np.ndarray | None = None,
-               other_label: str = "network poles") -> None:
-    """Pole map in the s-plane (Hz), optionally with a second pole set."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 5))
-    p = model.poles / (2 * np.pi)
-    ax.plot(p.real, p.imag, "x", label=f"fitted ({model.n_poles})")
-    if other is not None:
-        q = np.asarray(other) / (2 * np.pi)
-        ax.plot(q.real, q.imag, "o", mfc="none", label=other_label)
-    ax.set_xscale("symlog", linthresh=1e3)
-    ax.set_yscale("symlog", linthresh=1e3)
-    ax.set_xlabel("Re p / 2pi (Hz)")
-    ax.set_ylabel("Im p / 2pi (Hz)")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    save(fig, path)

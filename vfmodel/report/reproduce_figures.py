@@ -12,6 +12,7 @@ import numpy as np
 
 from vfmodel.pipeline.reproduce import ReproduceResult, SpeedResult, rpm_key
 from vfmodel.report._mpl import pyplot, save
+from vfmodel.signals.filters import F_CUT_HZ
 
 __all__ = ["write_figures"]
 
@@ -84,7 +85,7 @@ def _bearing(s: SpeedResult, out: Path, baseline: bool) -> str:
 def _bvr_f(s: SpeedResult, out: Path) -> str:
     plt = pyplot()
     fig, (am, ap) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    sel = (s.bvr_freq_hz > 0) & (s.bvr_freq_hz <= 10e6)
+    sel = (s.bvr_freq_hz > 0) & (s.bvr_freq_hz <= F_CUT_HZ)
     f = s.bvr_freq_hz[sel]
     am.loglog(f, np.abs(s.bvr_meas[sel]), ".", ms=2, label="measured (H1)")
     am.loglog(f, np.abs(s.bvr_model[sel]), "-", lw=1, label="grey-box model (same estimator)")

@@ -29,9 +29,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import fftconvolve
 
 from vfmodel.errors import InputError
-from vfmodel.signals._checks import as_channels, check_finite, check_fs
+from vfmodel.signals.checks import as_channels, check_finite, check_fs
 
-__all__ = ["brickwall_filter", "filter_blocks", "lowpass_fir"]
+__all__ = ["F_CUT_HZ", "brickwall_filter", "filter_blocks", "lowpass_fir"]
+
+F_CUT_HZ = 10e6
+"""The analysis band of the recordings (Hz): the reference paper filters every record to
+10 MHz (EMI above it), and peaks, spectra, H1 transfers and the identification use that
+band. The one constant of this cut-off; everything else refers to it."""
 
 
 def _check_cut(f_cut_hz: float, fs: float) -> float:
@@ -42,7 +47,7 @@ def _check_cut(f_cut_hz: float, fs: float) -> float:
 
 
 def brickwall_filter(
-    x: ArrayLike, fs: float, f_cut_hz: float = 10e6, *, names: list[str] | None = None
+    x: ArrayLike, fs: float, f_cut_hz: float = F_CUT_HZ, *, names: list[str] | None = None
 ) -> NDArray[np.float64]:
     """Zero every FFT bin above ``f_cut_hz`` and transform back (the paper's filter).
 
@@ -79,7 +84,7 @@ def brickwall_filter(
 
 def lowpass_fir(
     fs: float,
-    f_cut_hz: float = 10e6,
+    f_cut_hz: float = F_CUT_HZ,
     *,
     transition_hz: float | None = None,
     atten_db: float = 80.0,
@@ -119,7 +124,7 @@ def lowpass_fir(
 def filter_blocks(
     blocks: Iterable[ArrayLike],
     fs: float,
-    f_cut_hz: float = 10e6,
+    f_cut_hz: float = F_CUT_HZ,
     *,
     transition_hz: float | None = None,
     atten_db: float = 80.0,

@@ -1,4 +1,4 @@
-"""Multi-input H1 transfer estimator (Welch averaging), coherences, uncertainty, BVR(f).
+"""Multi-input H1 transfer estimator (Welch averaging), coherences, uncertainty.
 
 Model (paper eqs. 6-18): at every frequency ``Y = H X + N`` with inputs ``X`` (n_in),
 outputs ``Y`` (n_out) and noise ``N`` on the outputs only, uncorrelated with the inputs.
@@ -40,7 +40,7 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from vfmodel.errors import IllConditionedWarning, InputError
-from vfmodel.signals._checks import (
+from vfmodel.signals.checks import (
     as_channels,
     check_finite,
     check_fs,
@@ -49,7 +49,7 @@ from vfmodel.signals._checks import (
     warn_clipping,
 )
 
-__all__ = ["BvrResult", "H1Result", "bvr", "h1_analysis", "h1_analysis_blocks", "h1_estimate"]
+__all__ = ["H1Result", "h1_analysis", "h1_analysis_blocks", "h1_estimate"]
 
 Detrend = Literal["constant", "linear", "none"]
 _SEG_BATCH = 64  # segments transformed at once (bounds the memory of one batch)
@@ -216,7 +216,8 @@ def _finish(
             f"{cond_limit:.3g}) at {int(collinear.sum())} of {int(powered.sum())} frequencies "
             f"({fr.min():.6g}-{fr.max():.6g} Hz): the inputs are (nearly) linearly dependent, "
             "e.g. pure common-mode excitation u_U = u_V = u_W; H is set to NaN there. "
-            "Excite independent inputs, or estimate the common-mode transfer with bvr()",
+            "Excite independent inputs, or estimate the transfer from their mean (the "
+            "common mode) as a single input",
             IllConditionedWarning,
             stacklevel=3,
         )
@@ -408,53 +409,3 @@ def h1_analysis_blocks(
     warn_clipping(list(clipped.values()), "h1_analysis_blocks")
     return _finish(s_sum, k, n_in, fs, nperseg_, nov, win, window, detrend, cond_limit,
                    "h1_analysis_blocks")
-
-
-@dataclass(frozen=True)
-class BvrResult:
-    """Frequency-dependent bearing voltage ratio ``BVR(f) = U_b/U_CM`` (paper eq. 3).
-
-    ``coherence`` is the ordinary coherence between ``u_CM`` and ``u_B`` for the H1
-    method; for the plain ratio of Fourier transforms it is all NaN (not defined).
-    """
-
-    freq_hz: NDArray[np.float64]
-    bvr: NDArray[np.complex128]
-    coherence: NDArray[np.float64]
-    method: str
-
-
-def bvr(
-    u_u: ArrayLike,
-    u_v: ArrayLike,
-    u_w: ArrayLike,
-    u_b: ArrayLike,
-    fs: float,
-    *,
-    method: Literal["h1", "ratio"] = "h1",
-    **welch: Any,
-) -> BvrResult:
-    """``BVR(f) = U_b(j w) / U_CM(j w)`` with ``u_CM = (u_U + u_V + u_W) / 3`` (paper eq. 3).
-
-    ``method="ratio"``: the plain ratio of the whole-record Fourier transforms (the paper's
-    eqs. 3-5; noisy where ``U_CM`` is small). ``method="h1"`` (default): the single-input
-    H1 estimate ``G_{b,cm} / G_{cm,cm}`` with Welch averaging (``welch`` keywords as in
-    :func:`h1_analysis`), robust to output noise and with a coherence.
-    """
-    fs = check_fs(fs)
-    z, nm = as_channels([np.asarray(c) for c in (u_u, u_v, u_w, u_b)], "bvr",
-                        ["u_U", "u_V", "u_W", "u_B"])
-    check_finite(z, nm, "bvr")
-    u_cm = z[:3].mean(axis=0)
-    if method == "ratio":
-        cm = sfft.rfft(u_cm)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = sfft.rfft(z[3]) / cm
-        freq = sfft.rfftfreq(z.shape[1], 1 / fs)
-        return BvrResult(freq, ratio, np.full(freq.size, np.nan), "ratio")
-    if method != "h1":
-        raise InputError("unknown method", place="bvr: method", found=repr(method),
-                         expected="'h1' or 'ratio'")
-    res = h1_analysis(u_cm[None, :], z[3], fs, input_names=["u_CM"], output_names=["u_B"],
-                      **welch)
-    return BvrResult(res.freq_hz, res.h[:, 0, 0], res.coherence[:, 0], "h1")

@@ -56,7 +56,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError
-from vfmodel.signals._checks import as_channels, check_finite, check_fs
+from vfmodel.signals.checks import as_channels, check_finite, check_fs
+from vfmodel.signals.periodic import periodic_response
 
 __all__ = ["discrete_transfer", "simulate", "simulate_blocks", "simulate_periodic"]
 
@@ -546,5 +547,4 @@ def simulate_periodic(
     n_in, n = chans.shape
     _check_model(model, n_in)
     h = discrete_transfer(model, fs, n, input_model)
-    y = sfft.irfft(np.einsum("foi,if->of", h, sfft.rfft(chans, axis=-1)), n=n, axis=-1)
-    return np.asarray(y, dtype=float)
+    return periodic_response(h, sfft.rfft(chans, axis=-1), n)

@@ -16,7 +16,8 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from vfmodel.errors import InputError
-from vfmodel.signals._checks import as_channels, check_finite, check_fs
+from vfmodel.signals.checks import as_channels, check_finite, check_fs
+from vfmodel.signals.filters import F_CUT_HZ
 
 __all__ = [
     "EdgeTimes",
@@ -83,7 +84,7 @@ def spectral_energy(
 
 
 def energy_fraction_above(
-    x: ArrayLike, fs: float, f_hz: float = 10e6, *, remove_mean: bool = True
+    x: ArrayLike, fs: float, f_hz: float = F_CUT_HZ, *, remove_mean: bool = True
 ) -> NDArray[np.float64]:
     """Fraction of each channel's energy above ``f_hz`` (paper Fig. 8: ~0.3 % above 10 MHz)."""
     return spectral_energy(x, fs, remove_mean=remove_mean).fraction_above(f_hz)

@@ -1,6 +1,6 @@
-"""Virtual test bench: inverter waveforms, periodic steady-state response, probe and noise.
+"""Drive model: inverter waveforms, cable, probe and the periodic steady-state response.
 
-Pure functions (no file I/O). The bench is a two-level SiC inverter (sine-triangle PWM,
+Pure functions (no file I/O). The drive is a two-level SiC inverter (sine-triangle PWM,
 regular sampled, trapezoidal edges with rise time ``t_rise`` and fall time ``t_fall``,
 DC-link midpoint at frame potential) feeding the machine network through a lumped cable
 (series R-L per phase and shunt capacitance to the grounded shield), which
@@ -14,9 +14,8 @@ transfer (MNA at every FFT bin), by the probe response (2nd-order Butterworth lo
 bandwidth ``probe_bw_hz``) and transformed back. So the record does not start from rest:
 slow film time constants longer than the record are in steady state.
 
-Noise (:func:`add_noise`): white Gaussian noise plus EMI above 10 MHz (continuous tones
-and damped bursts at every switching edge, identical phase in all channels). The SNR of a
-channel is ``10 log10(var(clean) / mean(noise^2))`` over the stored (full-band) record.
+``predict --inverter`` drives an identified network with it; the virtual test benches
+(``benches/``) add their acquisition noise and EMI (``benches/noise.py``) on top.
 
 References
 ----------
@@ -35,20 +34,17 @@ from numpy.typing import NDArray
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.netlist import Circuit, Element
 from vfmodel.errors import InputError
+from vfmodel.signals.periodic import periodic_response
 
 __all__ = [
     "CableSpec",
-    "Emi",
     "InverterSpec",
     "ScopeSpec",
-    "add_noise",
-    "bench_circuit",
+    "drive_circuit",
     "edge_spectrum",
     "inverter_spectra",
-    "make_emi",
     "probe_response",
     "pwm_edges",
-    "snr_db",
     "steady_state",
 ]
 
@@ -165,7 +161,7 @@ def inverter_spectra(inv: InverterSpec, speed_rpm: float, scope: ScopeSpec) -> A
                      for r, f in edges])
 
 
-def bench_circuit(machine: Circuit, cable: CableSpec) -> Circuit:
+def drive_circuit(machine: Circuit, cable: CableSpec) -> Circuit:
     """Machine network + cable + unit inverter sources ``inv.U/V/W`` (w.r.t. frame)."""
     els: list[Element] = []
     g = machine.ground
@@ -192,60 +188,12 @@ def steady_state(machine: Circuit, inv: InverterSpec, cable: CableSpec, scope: S
                  speed_rpm: float, *, mna: MnaSystem | None = None) -> ArrF:
     """Noise-free periodic steady state (4, n_samples): u_U, u_V, u_W, u_B after the probe.
 
-    ``mna`` may be the compiled system of ``bench_circuit(machine, cable)`` to reuse.
+    ``mna`` may be the compiled system of ``drive_circuit(machine, cable)`` to reuse.
     """
     x = inverter_spectra(inv, speed_rpm, scope)
     n = round(scope.n_periods * scope.fs_hz / inv.f_sw_hz)
     f = np.arange(x.shape[1]) * scope.fs_hz / n
-    sys = bench_circuit(machine, cable).mna if mna is None else mna
+    sys = drive_circuit(machine, cable).mna if mna is None else mna
     h = sys.response(f, INV_SOURCES, OUTPUTS, method="modal")     # (n_f, 4, 3)
-    y = np.einsum("foi,if->of", h, x) * probe_response(f, scope.probe_bw_hz)[None, :]
-    return np.fft.irfft(y, n=n, axis=1)
-
-
-@dataclass(frozen=True)
-class Emi:
-    """EMI waveform (n_samples,) of unit RMS, shared by all channels (scaled per channel)."""
-
-    wave: ArrF
-
-
-def make_emi(rng: np.random.Generator, inv: InverterSpec, scope: ScopeSpec, speed_rpm: float,
-             n_tones: int = 4, burst_tau_s: float = 150e-9) -> Emi:
-    """Unit-RMS EMI above 10 MHz: ``n_tones`` continuous tones and damped bursts at edges."""
-    n = round(scope.n_periods * scope.fs_hz / inv.f_sw_hz)
-    t = np.arange(n) / scope.fs_hz
-    lo, hi = scope.emi_band_hz
-    tones = np.zeros(n)
-    for _ in range(n_tones):
-        tones += rng.uniform(0.5, 1.0) * np.sin(2 * np.pi * rng.uniform(lo, hi) * t
-                                                + rng.uniform(0, 2 * np.pi))
-    bursts = np.zeros(n)
-    f_b = rng.uniform(lo, hi)
-    for r, fl in pwm_edges(inv, speed_rpm, scope.n_periods):
-        for t0 in np.concatenate([r, fl]):
-            k0 = int(np.ceil(t0 * scope.fs_hz))
-            k1 = min(n, k0 + int(8 * burst_tau_s * scope.fs_hz))
-            tt = t[k0:k1] - t0
-            bursts[k0:k1] += np.exp(-tt / burst_tau_s) * np.sin(2 * np.pi * f_b * tt)
-    tones /= np.sqrt(np.mean(tones**2))
-    bursts /= np.sqrt(np.mean(bursts**2))
-    w = tones + bursts
-    return Emi(w / np.sqrt(np.mean(w**2)))
-
-
-def add_noise(clean: ArrF, noise_rms: ArrF, emi: Emi, emi_fraction: float,
-              rng: np.random.Generator) -> ArrF:
-    """``clean`` (n_ch, n) plus noise of RMS ``noise_rms`` per channel; a fraction
-    ``emi_fraction`` of the noise power is the shared EMI, the rest independent white noise."""
-    rms = np.asarray(noise_rms, dtype=float)[:, None]
-    white = rng.standard_normal(clean.shape) * rms * np.sqrt(1 - emi_fraction)
-    sign = rng.choice([-1.0, 1.0], size=(clean.shape[0], 1))
-    return clean + white + sign * rms * np.sqrt(emi_fraction) * emi.wave[None, :]
-
-
-def snr_db(clean: ArrF, noisy: ArrF) -> ArrF:
-    """Per channel ``10 log10(var(clean) / mean((noisy - clean)^2))``."""
-    c = np.atleast_2d(clean)
-    nz = np.atleast_2d(noisy) - c
-    return np.asarray(10 * np.log10(np.var(c, axis=1) / np.mean(nz**2, axis=1)), dtype=float)
+    h = h * probe_response(f, scope.probe_bw_hz)[:, None, None]
+    return periodic_response(h, x, n)

@@ -11,7 +11,7 @@ Truth values: :func:`vfmodel.greybox.assembly.default_params` perturbed log-norm
 (:attr:`ConcealedCase.size`).
 Data: impedance spectra of the six topologies at standstill (log grid, complex relative noise
 ``z_noise``) and recordings at a few speeds: the periodic steady state of the inverter,
-cable and probe of :mod:`vfmodel.greybox.bench` with white noise and EMI; the bearing noise
+cable and probe of :mod:`vfmodel.greybox.drive` with white noise and EMI; the bearing noise
 RMS is set, as on the bench, from the standstill bearing voltage of the truth with the
 metallic contact closed (SNR ``ScopeSpec.snr_bearing_db_standstill``).
 
@@ -21,23 +21,8 @@ parameters shared, lubricant parameters free per speed as in
 :func:`vfmodel.greybox.identify.identify`) to the noise-free data of the truth. Its reduced
 chi-square on noisy data would be ``1 + S_min / (N - k)``, which is what it reports.
 
-Detectability (proxy, default bench: 4 PWM periods at 50 MHz, H1 bins every 24 kHz):
-only effects that show in the impedance spectra can be concealed small and still be seen.
-With the lubricant free per speed (as the identification does) ``metallic_contact`` (the
-0-rpm "film" becomes a short: loss branch ``tau_d`` ~2 ns, ``C_1`` ~0.8 uF, ``C_2`` ~7 uF;
-proxy 1.0002. Even a physical film envelope, ``C <= 200 nF``, ``R >= 10 ohm``,
-``tau_d >= 10 ns``, does not help, proxy 1.0012: the fit then scales the rotor-side
-capacitances down together, ``C_wr`` 254 -> 8 pF, ``C_rf`` 1.5 -> 0.33 nF, rotating films
-26 -> 0.6 nF; the bearing-voltage ratio depends only on their ratios and the impedance
-spectra hardly see ``C_wr``/``C_rf``, in series and small against ``C_wf``. Finding the
-contact needs their absolute values, from geometry, which the data do not hold),
-``hertzian_edge_capacitance`` (a
-capacitance parallel to the film), ``lubricant_two_layer`` and
-``lubricant_dielectric_loss`` (Foster-equivalent one-ports: C + (R || C) equals
-C || (R + C), so each mimics the other; relaxations below the first H1 bin are not seen)
-are absorbed; ``ball_skin_effect`` (R_dc x10, L_int x3: proxy 1.000) and
-``frame_skin_effect`` (R_dc x20, rho 6: proxy 1.012) change milliohms in paths of ohms and
-stay below the noise.
+Which effects can be concealed small and still be detected (calibration with this proxy):
+``docs/notes.md``, "Concealed benches: detectability".
 
 No printing; the only file output is :func:`write_case` (atomic directory).
 """
@@ -52,40 +37,39 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
 
+from benches.noise import add_noise, make_emi, snr_db
+from benches.truth import lubricant_at_speed
 from vfmodel.core.atomic import atomic_directory
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_spectrum import csv_text
 from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
-from vfmodel.greybox._network import NetSpec
-from vfmodel.greybox._objective import (
-    ImpedanceTerm,
-    bearing_term,
-    dlogv_dlogp,
-    prepare_recording,
-)
 from vfmodel.greybox.assembly import (
     BEARING_NODE,
     SOURCES,
     TOPOLOGY_PORTS,
     default_params,
+    lubricant_names,
 )
-from vfmodel.greybox.bench import (
+from vfmodel.greybox.drive import (
     CableSpec,
     InverterSpec,
     ScopeSpec,
-    add_noise,
-    bench_circuit,
-    make_emi,
-    snr_db,
+    drive_circuit,
     steady_state,
 )
 from vfmodel.greybox.effects import EFFECT_LOCATIONS, PAPER_EFFECTS, check_effects
-from vfmodel.greybox.identify import bearing_state, lubricant_names, machine_names
+from vfmodel.greybox.identify import bearing_state, machine_names
+from vfmodel.greybox.lsq import fit_log
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.objective import (
+    ImpedanceTerm,
+    bearing_term,
+    dlogv_dlogp,
+    prepare_recording,
+)
 from vfmodel.greybox.params import ParamSet
-from vfmodel.greybox.truth import lubricant_at_speed
 
 __all__ = [
     "LOCATIONS",
@@ -311,7 +295,7 @@ def _clean_record(params: ParamSet, effects: frozenset[str], speed_rpm: float,
     net = config.spec(effects - {"fixture_inductance"}).build(p, st)
     cable = CableSpec()
     return steady_state(net, InverterSpec(), cable, config.scope, speed_rpm,
-                        mna=bench_circuit(net, cable).mna)
+                        mna=drive_circuit(net, cable).mna)
 
 
 def generate(case: ConcealedCase, seed: int = 0, unseen: bool = False,
@@ -421,7 +405,7 @@ class ProxyResult:
 
 def bearing_sigma(data: CaseData, thin: int = 4) -> dict[float, tuple[ArrF, ArrF]]:
     """Per speed ``(freq_hz, sigma (n_f, 3))`` of the detective's condition 2 for the noisy
-    recordings of ``data`` (:func:`vfmodel.greybox._objective.bearing_term`: H1 bins with
+    recordings of ``data`` (:func:`vfmodel.greybox.objective.bearing_term`: H1 bins with
     enough coherence, ``sigma = sqrt(h_std^2 + (0.02 |H1|)^2)``), every ``thin``-th bin
     with ``sigma / sqrt(thin)`` so that chi-square sums keep the weight of the full grid."""
     out: dict[float, tuple[ArrF, ArrF]] = {}
@@ -488,7 +472,7 @@ def proxy_fit(case: ConcealedCase, params: ParamSet, b_sigma: Mapping[float, tup
         dm = dlogv_dlogp(p0, m_names, spec, "standstill") if jac else None
         for s, st in states.items():
             ps = pset(x, s)
-            v = spec.build(ps, st, sources=True).param_values
+            v = spec.values(ps, st)
             ht = h_true[s]
             fb, sg = b_sigma[s]
             w = 1.0 / sg                                                   # (f, 3)
@@ -523,9 +507,8 @@ def proxy_fit(case: ConcealedCase, params: ParamSet, b_sigma: Mapping[float, tup
             cache[key] = (np.concatenate([r for _, r in bl]), jm)
         return cache[key]
 
-    sol = least_squares(lambda x: both(x)[0], x0, jac=lambda x: both(x)[1],
-                        bounds=(np.log(lo), np.log(hi)), method="trf", x_scale="jac",
-                        max_nfev=max_nfev, ftol=1e-12, xtol=1e-12, gtol=1e-12)
+    sol = fit_log(lambda x: both(x)[0], lambda x: both(x)[1], x0, np.log(lo), np.log(hi),
+                  max_nfev=max_nfev, ftol=1e-12, xtol=1e-12, gtol=1e-12, x_scale="jac")
     bl, _ = blocks(sol.x, False)
     n_res = sum(r.size for _, r in bl)
     s_tot = sum(float(r @ r) for _, r in bl)

@@ -12,10 +12,13 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+import numpy as np
+from numpy.typing import NDArray
+
 from vfmodel._choices import BearingState
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.errors import InputError
-from vfmodel.greybox.assembly import build_network
+from vfmodel.greybox.assembly import build_network, network_values
 from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet
 
@@ -40,6 +43,13 @@ class NetSpec:
               sources: bool = False) -> Circuit:
         return build(params, self.effects, state, n_rungs=self.n_rungs,
                      n_sections=self.n_sections, sources=sources)
+
+    def values(self, params: ParamSet | Mapping[str, float],
+               state: BearingState = "standstill") -> NDArray[np.float64]:
+        """Element values of :meth:`build` (``param_values`` order) without building the
+        netlist (:func:`vfmodel.greybox.assembly.network_values`)."""
+        return network_values(params, self.effects, state, n_rungs=self.n_rungs,
+                              n_sections=self.n_sections)
 
     def to_json_dict(self) -> dict[str, object]:
         return {"effects": sorted(self.effects), "n_rungs": self.n_rungs,

@@ -1,8 +1,10 @@
 """Fast transfer functions of a compiled MNA system on many frequencies (pole-residue form).
 
-For identification the bearing transfer ``U, V, W -> SN`` is needed on every FFT bin of a
-record up to 10 MHz (~10^4 bins) for every trial parameter set; a dense solve per bin is
-too slow. The finite generalized eigenvalues ``p_k`` of ``-G v = p C v`` (right vectors
+One of the fast solvers of :mod:`vfmodel.circuit._solvers` (balancing, infinite-eigenvalue
+threshold and check tolerance are defined there). For identification the bearing transfer
+``U, V, W -> SN`` is needed on every FFT bin of a record up to 10 MHz (~10^4 bins) for
+every trial parameter set; a dense solve per bin is too slow. The finite generalized
+eigenvalues ``p_k`` of ``-G v = p C v`` (right vectors
 ``V``, left vectors ``W``) give
 
     (G + sC)^-1 = V (s I - P)^-1 M^-1 W^H + (polynomial part),   M = W^H C V,
@@ -29,13 +31,18 @@ import numpy as np
 import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
+from vfmodel.circuit._solvers import (
+    INF_RATIO_TRANSFER,
+    TRANSFER_CHECK_TOL,
+    balance_pencil,
+    finite_mask,
+)
 from vfmodel.circuit.mna import MnaSystem
+
+__all__ = ["PoleResidue", "TransferMemo", "pole_residue", "transfer_on"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
-
-_INF_RATIO = 1e10     # |alpha/beta| above this multiple of ||G||/||C|| is an infinite eigenvalue
-_CHECK_TOL = 1e-5     # relative agreement with direct solves required (identification)
 
 
 @dataclass(frozen=True)
@@ -60,7 +67,7 @@ class PoleResidue:
 def pole_residue(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, *,
                  f_check_hz: ArrayLike = (1e3, 1e5, 1e6, 1e7),
                  f_inf_hz: float | tuple[float, ...] = 1e10,
-                 tol: float = _CHECK_TOL) -> PoleResidue | None:
+                 tol: float = TRANSFER_CHECK_TOL) -> PoleResidue | None:
     """Pole-residue form of ``Cout^T (G + sC)^-1 B`` or None when it fails the check.
 
     Parameters
@@ -76,18 +83,13 @@ def pole_residue(mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF, *,
         in turn (one eigendecomposition) and the first that passes the check is kept.
     """
     g, c = mna.matrices(values)
-    # diagonal balancing (eigenvalues unchanged): rows and columns of mixed units
-    dr = 1.0 / np.sqrt(np.maximum(np.abs(g).max(axis=1) + np.abs(c).max(axis=1), 1e-300))
-    dc = 1.0 / np.sqrt(np.maximum(np.abs(g).max(axis=0) + np.abs(c).max(axis=0), 1e-300))
-    gs = dr[:, None] * g * dc[None, :]
-    cs = dr[:, None] * c * dc[None, :]
+    gs, cs, dr, dc = balance_pencil(g, c)
     try:
         (alpha, beta), vl, vr = sla.eig(-gs, cs, left=True, right=True,
                                         homogeneous_eigvals=True, check_finite=False)
     except (np.linalg.LinAlgError, ValueError):
         return None
-    scale = np.linalg.norm(gs) / max(float(np.linalg.norm(cs)), 1e-300)
-    fin = np.abs(alpha) < _INF_RATIO * scale * np.abs(beta)
+    fin = finite_mask(alpha, beta, gs, cs, INF_RATIO_TRANSFER)
     if not np.any(fin):
         return None
     p = alpha[fin] / beta[fin]

@@ -18,7 +18,7 @@ network transfer on every FFT bin of the record, ``Y = sum_i H_i X_i``, inverse 
 record that does not start from rest and film time constants longer than the record are
 handled. ``r = (H1_model - H1_meas) / sigma`` with ``sigma^2 = h_std^2 + (eps |H1_meas|)^2``
 (H1 uncertainty plus a relative model-error floor). Its Jacobian is by forward differences
-in ``x`` (each costs one pole-residue evaluation of the network, :mod:`._fast`).
+in ``x`` (each costs one pole-residue evaluation of the network, :mod:`vfmodel.circuit.transfer`).
 """
 
 from __future__ import annotations
@@ -33,16 +33,17 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState, check_choice
 from vfmodel.circuit.mna import MnaSystem
+from vfmodel.circuit.transfer import TransferMemo
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
-from vfmodel.greybox._fast import TransferMemo
 from vfmodel.greybox._h1op import H1Operator, h1_operator
-from vfmodel.greybox._network import NetSpec
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
+from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.params import ParamSet
-from vfmodel.signals.filters import brickwall_filter
+from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
 from vfmodel.signals.h1 import H1Result, h1_analysis
+from vfmodel.signals.periodic import periodic_response, resample_periodic
 from vfmodel.signals.spectral import log_noise_sigma
 
 ArrF = NDArray[np.float64]
@@ -51,7 +52,6 @@ ArrC = NDArray[np.complex128]
 H1Weighting = Literal["diagonal", "covariance"]
 """Weighting of the condition-2 residual (:func:`bearing_term`)."""
 
-F_CUT_HZ = 10e6
 _LOG_STEP = 1e-6       # central-difference step of d log v / d log p
 _FD_STEP = 1e-4        # forward-difference step (log) of the condition-2 Jacobian
 _FD_MAX = 12
@@ -62,10 +62,11 @@ def values_of(params: ParamSet, spec: NetSpec, state: BearingState,
               sources: bool = False) -> ArrF:
     """Element values (in circuit parameter order) of the network for ``params``.
 
-    The terminal sources are not parameters (same values with and without them): the
-    network is built without them, which halves the netlist checks."""
+    The terminal sources are not parameters (same values with and without them). The
+    netlist is not rebuilt: the terms hold a network compiled once and only its element
+    values change (:meth:`NetSpec.values`)."""
     del sources
-    return spec.build(params, state).param_values
+    return spec.values(params, state)
 
 
 def dlogv_dlogp(params: ParamSet, names: Sequence[str], spec: NetSpec,
@@ -117,12 +118,6 @@ def log_map(params: ParamSet, names: Sequence[str], spec: NetSpec) -> LogMap:
 
 
 # ----------------------------------------------------------------------------- condition 1
-def noise_sigma_log(z: ArrC) -> float:
-    """Noise level (std of ``log Z`` per real component), floored at 1e-4 so that noiseless
-    data keep finite weights; see :func:`vfmodel.signals.spectral.log_noise_sigma`."""
-    return log_noise_sigma(z, floor=1e-4)
-
-
 @dataclass(frozen=True)
 class ImpedanceTerm:
     """Condition 1: the measured spectra of the topologies and the compiled network."""
@@ -191,7 +186,9 @@ def impedance_term(spectra: dict[str, FrequencyData], spec: NetSpec, params: Par
         if spectra[t].freq_hz.shape != f0.shape or not np.allclose(spectra[t].freq_hz, f0):
             raise ValueError("impedance spectra must share one frequency grid")
     z = np.stack([spectra[t].to_kind("Z").values[:, 0, 0] for t in topo], axis=1)
-    sig = np.array([noise_sigma_log(z[:, i]) for i in range(len(topo))])
+    # noise level per topology (std of log Z per real component), floored at 1e-4 so that
+    # noiseless data keep finite weights
+    sig = np.array([log_noise_sigma(z[:, i], floor=1e-4) for i in range(len(topo))])
     return ImpedanceTerm(topo, f0, z, sig, spec.build(params, "standstill").mna, spec)
 
 
@@ -225,15 +222,6 @@ class PreparedRecording:
         return self.fs * self.n_h1 / self.n_samples
 
 
-def _resample(spec: ArrC, n: int, n_new: int) -> ArrF:
-    """Samples (n_new,) of the periodic signal whose first rfft bins of an n-sample record
-    are ``spec`` (..., n_bins)."""
-    out = np.zeros((*spec.shape[:-1], n_new // 2 + 1), complex)
-    k = min(spec.shape[-1], n_new // 2 + 1)
-    out[..., :k] = spec[..., :k] * (n_new / n)
-    return np.asarray(sfft.irfft(out, n=n_new, axis=-1), dtype=float)
-
-
 def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
                       nperseg: int | None = None) -> PreparedRecording:
     """Filter (brickwall), transform and H1-analyse a recording (paper Sec. II-C, III-C)."""
@@ -247,8 +235,8 @@ def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
     q = max(1, int(fs // (2.5 * f_cut_hz)))
     n_h1 = n // q
     if q > 1:
-        xh = _resample(xb, n, n_h1)
-        yh = _resample(sfft.rfft(y)[sel], n, n_h1)
+        xh = resample_periodic(xb, n, n_h1)
+        yh = resample_periodic(sfft.rfft(y)[sel], n, n_h1)
     else:
         xh, yh = x, y
     if nperseg is not None and q > 1:
@@ -262,12 +250,37 @@ def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
 def steady_output(h_bins: ArrC, prep: PreparedRecording, *, for_h1: bool = False) -> ArrF:
     """Periodic steady-state model output from the transfer (n_bins, 1, 3) on the bins
     (full rate, or ``for_h1`` at the rate of the H1 record)."""
-    yb = np.einsum("fi,if->f", h_bins[:, 0, :], prep.x_bins)
-    return _resample(yb, prep.n_samples, prep.n_h1 if for_h1 else prep.n_samples)
+    return periodic_response(h_bins[:, :1, :], prep.x_bins, prep.n_samples,
+                             prep.n_h1 if for_h1 else prep.n_samples)[0]
+
+
+class RecordTransfer:
+    """The network's bearing transfer on a record's FFT bins and the periodic output it
+    gives; shared by the H1 term (:class:`BearingTerm`) and the waveform term
+    (:class:`vfmodel.greybox.record_fit.RecordTerm`), which hold these attributes."""
+
+    prep: PreparedRecording
+    state: BearingState
+    mna: MnaSystem
+    b: ArrF
+    cout: ArrF
+    spec: NetSpec
+    _memo: TransferMemo
+
+    def transfer_bins(self, params: ParamSet) -> ArrC:
+        """Network transfer (n_bins, 1, 3) on the record's FFT bins (the last one is kept:
+        the Jacobian at the point just evaluated reuses it)."""
+        v = values_of(params, self.spec, self.state, sources=True)
+        return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
+
+    def output(self, params: ParamSet) -> ArrF:
+        """Modelled bearing voltage at the record rate (periodic steady state, filtered
+        inputs)."""
+        return steady_output(self.transfer_bins(params), self.prep)
 
 
 @dataclass(frozen=True)
-class BearingTerm:
+class BearingTerm(RecordTransfer):
     """Condition 2 at one speed: measured H1 and the compiled network of that state."""
 
     prep: PreparedRecording
@@ -298,16 +311,6 @@ class BearingTerm:
     @property
     def freq_hz(self) -> ArrF:
         return self.op.freq_hz[self.op.mask]
-
-    def transfer_bins(self, params: ParamSet) -> ArrC:
-        """Network transfer (n_bins, 1, 3) on the record's FFT bins (the last one is kept:
-        the Jacobian at the point just evaluated reuses it)."""
-        v = values_of(params, self.spec, self.state, sources=True)
-        return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
-
-    def output(self, params: ParamSet) -> ArrF:
-        """Modelled bearing voltage (periodic steady state, filtered inputs)."""
-        return steady_output(self.transfer_bins(params), self.prep)
 
     def h1_model(self, params: ParamSet) -> ArrC:
         """H1 of the model output (same estimator as the measurement, eq. 21), with the
@@ -385,7 +388,7 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     w = fi - i0
     dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
     dyb = np.einsum("jif,if->jf", dfine, prep.x_bins)
-    return _resample(dyb, prep.n_samples, prep.n_h1)
+    return resample_periodic(dyb, prep.n_samples, prep.n_h1)
 
 
 def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,

@@ -19,7 +19,6 @@ from vfmodel.errors import InputError, SignalWarning
 __all__ = [
     "as_channels",
     "channel_names",
-    "check_clipping",
     "check_finite",
     "check_fs",
     "check_length",
@@ -181,13 +180,3 @@ def warn_clipping(found: Sequence[tuple[str, int, str, float]], place: str) -> N
             SignalWarning,
             stacklevel=3,
         )
-
-
-def check_clipping(
-    x: NDArray[Any], names: Sequence[str], place: str, *, min_run: int = 5
-) -> list[str]:
-    """Warn (:class:`SignalWarning`) for clipped channels (see :func:`find_clipping`);
-    return their names."""
-    found = find_clipping(x, names, min_run=min_run)
-    warn_clipping(found, place)
-    return [f[0] for f in found]

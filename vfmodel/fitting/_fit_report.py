@@ -1,0 +1,243 @@
+"""What :func:`vfmodel.fitting.vectfit.vector_fit` reports: :class:`FitReport`, the error
+measures (:func:`fit_errors`, :func:`point_errors`), the model built from the fitted
+coefficients and the pole-free model of constant data."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.rational_model import RationalModel
+from vfmodel.errors import FitError
+from vfmodel.fitting import _vf_core
+from vfmodel.fitting._fit_setup import _DELAY_TURNS, _phase_turns
+
+_FAR = 3.0  # an automatic fit this many times above the noise floor gets a note
+
+
+@dataclass(frozen=True)
+class FitStep:
+    """One pole-relocation iteration of the fit.
+
+    ``order`` counts every pole (each complex pole of a conjugate pair separately);
+    ``weighted_rel_rms_error`` = ||W (H_model - H)||_F / ||W H||_F at that iteration;
+    ``sigma_deviation`` = max |sigma - 1| (0 when the poles no longer move).
+    """
+
+    order: int
+    weighted_rel_rms_error: float
+    sigma_deviation: float
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """What :func:`vector_fit` did and how well the model matches the data.
+
+    Attributes
+    ----------
+    order : int
+        Number of poles, each complex pole of a conjugate pair counted separately
+        (the length of ``model.poles``).
+    n_iterations : int
+        Pole-relocation iterations run in total (all orders tried).
+    rms_error : float
+        sqrt(mean |H_model - H_data|^2) over all frequencies and entries (unweighted).
+    rel_rms_error : float
+        ||H_model - H_data||_F / ||H_data||_F over all frequencies and entries
+        (CONTRACT section 4).
+    weighted_rel_rms_error : float
+        The same with the fitting weights: ||W (H_model - H)||_F / ||W H||_F.
+    max_abs_error : float
+        max |H_model - H_data|.
+    converged : bool
+        The last pole relocation met the convergence test.
+    order_reason : str
+        Why this order (given, or how the automatic selection stopped).
+    noise_floor : float or None
+        Estimated noise level of the data in the units of ``weighted_rel_rms_error``
+        (RMS of the noise of W H divided by the RMS of W H); None when not estimated.
+    history : tuple of FitStep
+        Every pole-relocation iteration in order.
+    weighting : str
+        The weighting used ("user" for an array; "auto" is resolved to what it chose).
+    kind : str
+        Representation fitted (Z, Y, S or H).
+    point_rel_rms_error, point_rel_max_error : float
+        Per-point relative error e(f) = ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F:
+        its RMS over the frequencies and its maximum (what a user judging an impedance
+        point by point sees, e.g. the MAPE of |Z|).
+    notes : tuple of str
+        Warnings about the fit (also raised as :class:`~vfmodel.errors.FitWarning`), e.g.
+        an error that stays far above the noise floor and why.
+    """
+
+    order: int
+    n_iterations: int
+    rms_error: float
+    rel_rms_error: float
+    weighted_rel_rms_error: float
+    max_abs_error: float
+    converged: bool
+    order_reason: str
+    noise_floor: float | None
+    history: tuple[FitStep, ...]
+    weighting: str
+    kind: str
+    point_rel_rms_error: float = 0.0
+    point_rel_max_error: float = 0.0
+    notes: tuple[str, ...] = ()
+
+    def _repr_html_(self) -> str:
+        """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
+        from vfmodel.report.notebook import fit_report_html
+
+        return fit_report_html(self)
+
+    def plot(self, ax: Any = None) -> Any:
+        """Error of every pole-relocation iteration (matplotlib imported now); the axes."""
+        from vfmodel.report.notebook import fit_report_plot
+
+        return fit_report_plot(self, ax)
+
+
+def _to_model(
+    coef: _vf_core.Coefficients,
+    fd: FrequencyData,
+    omega_scale: float,
+    *,
+    fit_d: bool,
+    fit_e: bool,
+) -> RationalModel:
+    reps = coef.reps
+    nr = int(np.sum(reps.imag == 0))
+    m = coef.c.shape[0]
+    poles: list[complex] = []
+    res: list[NDArray[np.complex128]] = []
+    for j in range(nr):
+        poles.append(complex(reps[j].real))
+        res.append(coef.c[:, j].astype(complex))
+    for j, p in enumerate(reps[nr:]):
+        i = nr + 2 * j
+        r = coef.c[:, i] + 1j * coef.c[:, i + 1]
+        poles += [complex(p), complex(np.conj(p))]
+        res += [r, np.conj(r)]
+    # undo the frequency scaling: s' = s / w0, p = w0 p', r = w0 r', e = e' / w0
+    p_arr = np.asarray(np.array(poles, dtype=complex) * omega_scale, dtype=complex)
+    if poles:
+        r_arr = np.asarray(
+            np.array(res, dtype=complex).reshape(len(poles), fd.n_out, fd.n_in) * omega_scale,
+            dtype=complex,
+        )
+    else:
+        r_arr = np.zeros((0, fd.n_out, fd.n_in), complex)
+    d = coef.d.reshape(fd.n_out, fd.n_in) if fit_d else np.zeros((fd.n_out, fd.n_in))
+    e = coef.e.reshape(fd.n_out, fd.n_in) / omega_scale if fit_e else None
+    if not (np.all(np.isfinite(p_arr)) and np.all(np.isfinite(r_arr)) and np.all(np.isfinite(d))):
+        raise FitError("vector fitting produced non-finite poles or residues")
+    del m
+    return RationalModel(poles=p_arr, residues=r_arr, d=d, e=e, kind=fd.kind, z0=fd.z0)
+
+
+def fit_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float, float]:
+    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4)."""
+    diff = model(fd.freq_hz) - fd.values
+    rms = float(np.sqrt(np.mean(np.abs(diff) ** 2)))
+    rel = float(np.linalg.norm(diff) / max(float(np.linalg.norm(fd.values)), 1e-300))
+    return rms, rel, float(np.max(np.abs(diff)))
+
+
+def point_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float]:
+    """(RMS, max) over frequency of the per-point relative error
+    ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F (a zero sample counts against 1e-12
+    of the largest)."""
+    diff = np.linalg.norm((model(fd.freq_hz) - fd.values).reshape(fd.n_freq, -1), axis=1)
+    norm = np.linalg.norm(fd.values.reshape(fd.n_freq, -1), axis=1)
+    norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
+    e = diff / np.where(norm > 0, norm, 1.0)
+    return float(np.sqrt(np.mean(e**2))), float(np.max(e))
+
+
+def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitReport]:
+    """Pole-free model of frequency-independent data: D = the (real) mean response."""
+    d = fd.values.mean(axis=0).real
+    model = RationalModel(
+        poles=np.zeros(0, complex),
+        residues=np.zeros((0, fd.n_out, fd.n_in), complex),
+        d=d,
+        kind=fd.kind,
+        z0=fd.z0,
+    )
+    rms, rel, mx = fit_errors(model, fd)
+    prms, pmax = point_errors(model, fd)
+    reason = "constant data: no poles, D alone"
+    return model, FitReport(
+        order=0, n_iterations=0, rms_error=rms, rel_rms_error=rel,
+        weighted_rel_rms_error=rel, max_abs_error=mx, converged=True,
+        order_reason=reason, noise_floor=None, history=(), weighting=wname, kind=fd.kind,
+        point_rel_rms_error=prms, point_rel_max_error=pmax,
+    )
+
+
+def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitReport:
+    """Add a note when the automatic order stopped far above the noise floor, saying why."""
+    floor = report.noise_floor or 0.0
+    err = report.weighted_rel_rms_error
+    if err <= _FAR * max(floor, 1e-9) or err < 1e-3:
+        return report
+    why = []
+    turns = _phase_turns(fd)
+    if turns > _DELAY_TURNS:
+        why.append(
+            f"the phase turns {turns:.0f} times over the band (a delay of about "
+            f"{turns / max(fd.freq_hz[-1] - fd.freq_hz[0], 1e-300):.3g} s), which costs "
+            "about two poles per turn"
+        )
+    if report.order >= limit - 1:
+        why.append(f"the order limit {limit} was reached (raise max_order)")
+    if not why:
+        why.append("adding poles stopped improving the fit (noisy or non-rational data)")
+    note = (
+        f"the fit error {err:.3g} stays far above the estimated noise floor {floor:.3g} "
+        f"at order {report.order}: " + "; ".join(why)
+    )
+    return replace(report, notes=(*report.notes, note))
+
+
+def _make_report(
+    model: RationalModel,
+    fd: FrequencyData,
+    prob: _vf_core.Problem,
+    coef: _vf_core.Coefficients,
+    n_it: int,
+    converged: bool,
+    reason: str,
+    noise: float | None,
+    history: tuple[_vf_core.IterationRecord, ...],
+    wname: str,
+) -> FitReport:
+    rms, rel, mx = fit_errors(model, fd)
+    prms, pmax = point_errors(model, fd)
+    wrel = _vf_core.weighted_rel_rms(prob, _vf_core.evaluate(prob, coef))
+    steps = tuple(
+        FitStep(r.order, float(r.weighted_rel_rms), float(r.sigma_deviation)) for r in history
+    )
+    return FitReport(
+        order=model.n_poles,
+        n_iterations=int(n_it),
+        rms_error=rms,
+        rel_rms_error=rel,
+        weighted_rel_rms_error=float(wrel),
+        max_abs_error=mx,
+        converged=bool(converged),
+        order_reason=reason,
+        noise_floor=None if noise is None else float(noise),
+        history=steps,
+        weighting=wname,
+        kind=fd.kind,
+        point_rel_rms_error=prms,
+        point_rel_max_error=pmax,
+    )
