@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import REPO
+from vfmodel.circuit import transfer
 from vfmodel.cli.main import main
 from vfmodel.detective.fit import evaluate
 from vfmodel.detective.problem import channel_slices
@@ -95,23 +96,39 @@ def test_null_residual_points_are_uncorrelated(null: DiagnoseResult) -> None:
         assert abs(rho) <= 3 / np.sqrt(n_pairs), (kind, rho, n_pairs)
 
 
-def test_analytic_jacobian_matches_central_differences(null: DiagnoseResult) -> None:
+def test_analytic_jacobian_matches_central_differences(
+        null: DiagnoseResult, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Columns of the analytic Jacobian (every fourth) against central differences of the
+    model solved directly (sparse LU per record bin, exact to rounding). The identification's
+    own evaluations use the pole-residue transfer, checked to 1e-5 of the largest response:
+    at standstill, whose whitening divides by a small noise level, that error (and the
+    CPU's rounding) is larger than a central difference with step 1e-4, so it cannot be
+    the reference."""
     fam = null.family
     p = null.diagnosis.final.params
     names = fam.free_names((), p)
     r, jm = fam.residual_jacobian((), p, names)  # type: ignore[attr-defined]
     np.testing.assert_allclose(r, evaluate(fam, (), p), rtol=0, atol=1e-9)
+    monkeypatch.setattr(transfer, "transfer_on",
+                        lambda mna, b, cout, v, f: mna.solve(f, b, cout, v, method="sparse").h)
     h = 1e-4
-    for n in (names[0], "insulation.C_wr", names[-1]):
-        k = names.index(n)
+    cols = sorted(set(range(0, len(names), 4)) | {names.index("insulation.C_wr"),
+                                                   len(names) - 1})
+    fds = []
+    for k in cols:
         x = p.to_log(names)
         x[k] += h
         rp = evaluate(fam, (), p.from_log(x, names))
         x[k] -= 2 * h
         rm = evaluate(fam, (), p.from_log(x, names))
-        fd = (rp - rm) / (2 * h)
-        # adjoint sensitivities interpolated over the record bins: 2 % of the column
-        assert np.linalg.norm(fd - jm[:, k]) <= 0.02 * np.linalg.norm(fd), n
+        fds.append((rp - rm) / (2 * h))
+    fd = np.stack(fds, axis=1)
+    big = np.linalg.norm(fd, axis=0)
+    for i in np.flatnonzero(big >= 1e-3 * big.max()):     # columns above rounding noise
+        k = cols[i]
+        # adjoint sensitivities dH/H interpolated over the record bins: 2 % of the column
+        err = np.linalg.norm(fd[:, i] - jm[:, k])
+        assert err <= 0.02 * big[i], (names[k], err / big[i])
 
 
 def test_time_windows_no_false_alarm_and_a_burst_is_found() -> None:

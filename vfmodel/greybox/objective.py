@@ -56,6 +56,7 @@ _LOG_STEP = 1e-6       # central-difference step of d log v / d log p
 _FD_STEP = 1e-4        # forward-difference step (log) of the condition-2 Jacobian
 _FD_MAX = 12
 _J_DENSE_HZ = 50e3     # condition-2 Jacobian: every record bin up to here, then H1 bins
+_J_TOP = 1.5           # ... up to this multiple of the highest tested bin
 
 
 def values_of(params: ParamSet, spec: NetSpec, state: BearingState,
@@ -337,7 +338,8 @@ class BearingTerm(RecordTransfer):
         (forward differences for up to ``_FD_MAX`` parameters, else adjoint).
 
         ``adjoint``: ``dH/dx`` by the adjoint method on a coarse grid (every record bin up to
-        ``_J_DENSE_HZ``, then every second H1 bin), interpolated linearly onto every record bin,
+        ``_J_DENSE_HZ``, then every H1 bin to 1.5x the tested band), ``dH/H`` interpolated
+        linearly onto every record bin (see :func:`output_derivatives`),
         turned into output derivatives ``dY = sum_i dH_i X_i`` and passed through the same
         H1 operator (the operator is linear). ``fd``: forward differences of the residual.
         """
@@ -356,13 +358,14 @@ class BearingTerm(RecordTransfer):
                 cols.append((self._r(self.h1_model(p1)) - r) / step)
             return r, np.stack(cols, axis=1)
         fb = self.prep.bins_hz
-        # every second H1 bin over the tested band (the term may test only some of them)
+        # every H1 bin from _J_DENSE_HZ to beyond the tested band (the term may test only
+        # some of them; the window's leakage reaches the neighbours)
         fh = self.op.freq_hz
-        fm = self.freq_hz
-        grid = np.union1d(fb[fb <= _J_DENSE_HZ], fh[(fh >= fm[0]) & (fh <= fm[-1])][::2])
+        top = _J_TOP * self.freq_hz[-1]
+        grid = np.union1d(fb[fb <= _J_DENSE_HZ], fh[(fh >= _J_DENSE_HZ) & (fh <= top)])
         grid = grid[grid > 0]
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, lmap)
+                                grid, lmap, self.transfer_bins(params))
         dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
@@ -371,13 +374,18 @@ class BearingTerm(RecordTransfer):
 
 def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
                        prep: PreparedRecording, params: ParamSet, names: Sequence[str],
-                       grid: ArrF, lmap: LogMap | None = None) -> ArrF:
+                       grid: ArrF, lmap: LogMap | None = None,
+                       h_bins: ArrC | None = None) -> ArrF:
     """``d y_model / d log p`` (n_names, n_h1): the bearing transfer's derivatives by the
     adjoint method on ``grid`` (Hz), interpolated linearly onto every record bin (DC: the
     lowest grid value), applied to the record's terminal spectra and resampled to the H1
-    rate (the periodic response of :func:`steady_output` is linear in the transfer)."""
+    rate (the periodic response of :func:`steady_output` is linear in the transfer).
+
+    With ``h_bins`` (the transfer (n_bins, 1, 3) on every record bin) the relative
+    sensitivity ``dH / H`` is interpolated and multiplied by ``h_bins``: it varies slowly
+    across the resonances that make ``dH`` itself change sign between grid points."""
     v = values_of(params, spec, state, sources=True)
-    _, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
+    hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
     dl = (lmap.at(params) if lmap is not None
           else dlogv_dlogp(params, names, spec, state, sources=True))
     dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v, dl)      # (n_p, 3, n_g)
@@ -386,7 +394,12 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
     i1 = np.clip(i0 + 1, 0, grid.size - 1)
     w = fi - i0
-    dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w            # (n_p, 3, n_bins)
+    if h_bins is None:
+        dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w        # (n_p, 3, n_bins)
+    else:
+        hgt = hg[:, 0, :].T                                       # (3, n_g)
+        rel = dhx / np.where(hgt == 0, 1.0, hgt)
+        dfine = (rel[..., i0] * (1 - w) + rel[..., i1] * w) * h_bins[:, 0, :].T
     dyb = np.einsum("jif,if->jf", dfine, prep.x_bins)
     return resample_periodic(dyb, prep.n_samples, prep.n_h1)
 

@@ -110,7 +110,7 @@ class RecordTerm(RecordTransfer):
     def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
                  lmap: LogMap | None = None) -> tuple[ArrF, ArrF | None]:
         """``r`` (n_window,) and, with ``jac``, ``dr/dx`` by the adjoint method on a grid
-        (every bin up to 50 kHz, then log spaced) interpolated onto every record bin."""
+        (every bin up to 50 kHz, then log spaced), ``dH/H`` interpolated onto every record bin."""
         r = self.raw_difference(params) / self.sigma
         if not jac:
             return r, None
@@ -121,7 +121,7 @@ class RecordTerm(RecordTransfer):
         grid = np.union1d(fb[(fb > 0) & (fb <= _J_DENSE_HZ)],
                           np.geomspace(_J_DENSE_HZ, hi, _J_LOG_POINTS))
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, lmap)[:, self.window]
+                                grid, lmap, self.transfer_bins(params))[:, self.window]
         jm = self._project(dy) / self.sigma
         return r, np.ascontiguousarray(jm.T)
 
