@@ -48,6 +48,9 @@ class _Bars:
 
         bar = self._bars.get(stage)
         if bar is None:
+            # no monitor thread: identification forks worker processes only from a
+            # process without threads (vfmodel.core.parallel)
+            tqdm.monitor_interval = 0
             for other in self._bars.values():
                 other.close()
             bar = tqdm(total=total, desc=stage, file=sys.stderr, leave=True,

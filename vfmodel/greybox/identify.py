@@ -56,6 +56,7 @@ from numpy.typing import NDArray
 from vfmodel._choices import BearingState
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import default_params, lubricant_names
@@ -297,11 +298,18 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
 def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
              names: Sequence[str], stage: str, max_nfev: int, prior_sigma: float,
              progress: Progress) -> tuple[ParamSet, StageReport]:
+    """The best (lowest chi2_red, ties to the first) of one fit per start; the starts are
+    independent and run side by side in processes where :func:`parallel_map` can."""
+    labels = [stage if len(starts) == 1 else f"{stage} (start {k + 1}/{len(starts)})"
+              for k in range(len(starts))]
+
+    def one(k: int, prog: Progress) -> tuple[ParamSet, StageReport]:
+        return fit_stage(terms, starts[k], names, labels[k], max_nfev=max_nfev,
+                         prior_sigma=prior_sigma, progress=prog)
+
+    results = parallel_map(one, len(starts), progress, labels, max_nfev)
     best: tuple[ParamSet, StageReport] | None = None
-    for k, s in enumerate(starts):
-        lab = stage if len(starts) == 1 else f"{stage} (start {k + 1}/{len(starts)})"
-        p, rep = fit_stage(terms, s, names, lab, max_nfev=max_nfev, prior_sigma=prior_sigma,
-                           progress=progress)
+    for p, rep in results:
         if best is None or rep.chi2_red < best[1].chi2_red:
             best = (p, StageReport(stage, rep.names, rep.n_residuals, rep.chi2_red, rep.nfev,
                                    rep.status, rep.rel_std, rep.cov_log, rep.corr_factor))
@@ -392,14 +400,22 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     if dataset.impedance:
         thin = thin_spectra(dataset.impedance, fit_points)
         best: tuple[float, NetSpec, ParamSet, StageReport] | None = None
-        for n in cands:
-            sp = NetSpec(eff, n_rungs, n)
+
+        def fit_sections(k: int, prog: Progress) -> tuple[NetSpec, ParamSet, StageReport]:
+            sp = NetSpec(eff, n_rungs, cands[k])
             term = impedance_term(thin, sp, p0)
             ps = initial_params(term, p0) if start is None else p0
-            names = machine_names(ps, sp)
-            pn, rep = fit_stage([(term, 1.0)], ps, names, f"impedance, {n} sections",
-                                max_nfev=max_nfev, prior_sigma=prior_sigma,
-                                progress=progress)
+            pn, rep = fit_stage([(term, 1.0)], ps, machine_names(ps, sp),
+                                f"impedance, {cands[k]} sections", max_nfev=max_nfev,
+                                prior_sigma=prior_sigma, progress=prog)
+            return sp, pn, rep
+
+        # the first two candidates are always fitted: side by side; then one at a time
+        n_first = min(2, len(cands))
+        first = parallel_map(fit_sections, n_first, progress,
+                             [f"impedance, {n} sections" for n in cands[:n_first]], max_nfev)
+        for k in range(len(cands)):
+            sp, pn, rep = first[k] if k < n_first else fit_sections(k, progress)
             stages.append(rep)
             improved = best is None or rep.chi2_red < best[0] * (1 - min_gain)
             if best is None or rep.chi2_red < best[0]:

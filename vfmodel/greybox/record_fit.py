@@ -61,6 +61,7 @@ from vfmodel.greybox.objective import (
     LogMap,
     PreparedRecording,
     RecordTransfer,
+    jacobian_grid,
     output_derivatives,
     steady_output,
 )
@@ -71,9 +72,6 @@ __all__ = ["RecordTerm", "record_term"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
-
-_J_DENSE_HZ = 50e3      # Jacobian grid: every record bin up to here ...
-_J_LOG_POINTS = 600     # ... then this many log-spaced points up to the cut-off
 
 
 @dataclass(frozen=True)
@@ -116,10 +114,7 @@ class RecordTerm(RecordTransfer):
             return r, None
         if not names:
             return r, np.zeros((r.size, 0))
-        fb = self.prep.bins_hz
-        hi = fb[-1]
-        grid = np.union1d(fb[(fb > 0) & (fb <= _J_DENSE_HZ)],
-                          np.geomspace(_J_DENSE_HZ, hi, _J_LOG_POINTS))
+        grid = jacobian_grid(self.prep.bins_hz, float(self.prep.bins_hz[-1]))
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
                                 grid, lmap, self.transfer_bins(params))[:, self.window]
         jm = self._project(dy) / self.sigma

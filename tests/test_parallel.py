@@ -1,0 +1,58 @@
+"""Independent fits in forked processes (vfmodel.core.parallel): the same results as in
+sequence, in the same order, and processes really used where they are allowed.
+
+Reference: the sequential run of the same calls (``VFMODEL_WORKERS=1``). Runs in a fresh
+interpreter, because the pytest-xdist worker has threads (no fork there, by design)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from tests.conftest import REPO
+
+SCRIPT = textwrap.dedent("""
+    import json, os, sys
+    sys.path.insert(0, {repo!r})
+    from benches.small_dataset import make_small_dataset
+    from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.core.parallel import parallel_map, workers
+    from vfmodel.greybox.identify import identify
+
+    def job(k, prog):
+        return (k, os.getpid())
+
+    out = {{"parent": os.getpid()}}
+    ds = read_dataset(make_small_dataset({root!r}, seed=1, n_samples=4096))
+    for w in ("1", "2"):
+        os.environ["VFMODEL_WORKERS"] = w
+        out["workers" + w] = workers(2)
+        out["map" + w] = parallel_map(job, 3)
+        idf = identify(ds)
+        out["params" + w] = [float(v) for v in idf.params.values]
+        out["chi2" + w] = [s.chi2_red for s in idf.stages]
+    print(json.dumps(out))
+""")
+
+
+def test_forked_fits_equal_the_sequential_ones(tmp_path: Path) -> None:
+    code = SCRIPT.format(repo=str(REPO), root=str(tmp_path / "small"))
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, timeout=600, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    assert out["workers1"] == 1 and out["workers2"] == 2
+    # order kept; in sequence the parent runs the jobs, with 2 workers other processes
+    assert [k for k, _ in out["map1"]] == [0, 1, 2] == [k for k, _ in out["map2"]]
+    assert {pid for _, pid in out["map1"]} == {out["parent"]}
+    assert out["parent"] not in {pid for _, pid in out["map2"]}
+    # the same arithmetic in another process: identical to rounding (1e-12 relative)
+    for a, b in zip(out["params1"], out["params2"], strict=True):
+        assert abs(a - b) <= 1e-12 * max(abs(a), 1e-300), (a, b)
+    for a, b in zip(out["chi21"], out["chi22"], strict=True):
+        assert abs(a - b) <= 1e-12 * abs(a), (a, b)
