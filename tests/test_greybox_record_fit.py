@@ -18,7 +18,8 @@ from vfmodel.circuit.transfer import transfer_on
 from vfmodel.core.recording import Recording
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, default_params
 from vfmodel.greybox.bearing import divider_capacitances
-from vfmodel.greybox.identify import fit_stage, log_interval
+from vfmodel.greybox.identify import fit_stage
+from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.objective import prepare_recording
 from vfmodel.greybox.params import ParamSet

@@ -86,7 +86,6 @@ if TYPE_CHECKING:
         fit_stage,
         initial_params,
         joint_stage,
-        log_interval,
         machine_names,
         thin_spectra,
     )
@@ -94,6 +93,7 @@ if TYPE_CHECKING:
         LogFit,
         fit_log,
         log_covariance,
+        log_interval,
         log_start,
     )
     from vfmodel.greybox.metrics import (
@@ -205,7 +205,7 @@ _EXPORTS: dict[str, str] = {
     "fit_stage": "identify",
     "initial_params": "identify",
     "joint_stage": "identify",
-    "log_interval": "identify",
+    "log_interval": "lsq",
     "machine_names": "identify",
     "thin_spectra": "identify",
     "band_mape_pct": "metrics",

@@ -46,7 +46,7 @@ J. S. Bendat, A. G. Piersol, *Random Data*, 4th ed., Wiley, 2010 (H1 estimator).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -96,7 +96,6 @@ __all__ = [
     "identify",
     "initial_params",
     "joint_stage",
-    "log_interval",
     "lubricant_names",
     "machine_names",
     "thin_spectra",
@@ -410,8 +409,10 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
                                 prior_sigma=prior_sigma, progress=prog)
             return sp, pn, rep
 
-        # the first two candidates are always fitted: side by side; then one at a time
-        n_first = min(2, len(cands))
+        # the first two candidates are always fitted, the third often: all three side by
+        # side (with two processes the third runs while the second does; a third not
+        # needed costs CPU, not time), further ones one at a time
+        n_first = min(3, len(cands))
         first = parallel_map(fit_sections, n_first, progress,
                              [f"impedance, {n} sections" for n in cands[:n_first]], max_nfev)
         for k in range(len(cands)):
@@ -591,38 +592,3 @@ def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
                                                  "bearing.C_edge") if n in previous}
             starts.append(previous.with_values(upd, clip=True))
     return starts
-
-
-def log_interval(params: ParamSet, report: StageReport,
-                 quantity: Callable[[ParamSet], float],
-                 level_z: float = 1.959964) -> dict[str, float | None]:
-    """Value and 95 % interval of a positive derived ``quantity(params)`` from a stage's
-    covariance of ``log p`` (delta method in log space: ``var log q = g^T C g`` with
-    ``g = d log q / d log p`` by central differences of step 1e-4).
-
-    Returns ``value``, ``lo``, ``hi`` and ``std_log`` (``lo``/``hi``/``std_log`` ``None``
-    when the data do not bound it: an infinite variance).
-    """
-    q0 = float(quantity(params))
-    if report.cov_log is None or q0 <= 0:
-        return {"value": q0, "lo": None, "hi": None, "std_log": None}
-    # names of the report that ``params`` holds (a joint stage also has per-speed copies)
-    keep = [k for k, n in enumerate(report.names) if n in params]
-    names = tuple(report.names[k] for k in keep)
-    x0 = params.to_log(names)
-    g = np.zeros(len(names))
-    for j in range(len(names)):
-        xp, xm = x0.copy(), x0.copy()
-        xp[j] += 1e-4
-        xm[j] -= 1e-4
-        qp = quantity(params.from_log(xp, names))
-        qm = quantity(params.from_log(xm, names))
-        g[j] = (np.log(qp) - np.log(qm)) / 2e-4 if qp > 0 and qm > 0 else 0.0
-    cov = report.cov_log[np.ix_(keep, keep)]
-    used = np.abs(g) > 1e-9
-    if not np.all(np.isfinite(cov[np.ix_(used, used)])):
-        return {"value": q0, "lo": None, "hi": None, "std_log": None}
-    var = float(g[used] @ cov[np.ix_(used, used)] @ g[used])
-    sd = float(np.sqrt(max(var, 0.0)))
-    return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
-            "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd}
