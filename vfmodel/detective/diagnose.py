@@ -24,10 +24,12 @@ doi:10.1080/01621459.1995.10476572 (BIC difference > 10: very strong evidence)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
+from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.fit import FitResult, refit
 from vfmodel.detective.locate import Mismatch, locate
@@ -154,6 +156,14 @@ def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int,
                  {n: full.rel_std[n] for n in new if n in full.rel_std})
 
 
+def _trial(i: int, prog: Progress, *, family: Family, base: FitResult,
+           cands: tuple[Candidate, ...], max_nfev: int, base_even: FitResult,
+           heldout_nfev: int, stage: str) -> Trial:
+    """Candidate ``i`` of a round (a job of :func:`vfmodel.core.parallel.parallel_map`)."""
+    prog(stage, i, len(cands))
+    return _try(family, base, cands[i], max_nfev, base_even, heldout_nfev)
+
+
 def _reason(t: Trial, bic_min: float, mismatch_left: bool) -> str:
     k = t.candidate.n_params
     s = (f"Delta chi2 = {t.delta_chi2:+.1f} for {k} more parameter{'s' * (k != 1)}, "
@@ -233,7 +243,6 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
     last: dict[tuple[str, str], Trial] = {}
     rounds: list[tuple[Trial, ...]] = []
     while remaining:
-        trials = []
         if not rounds:
             # polish the start with the same budget a candidate's refit gets, so that a
             # candidate cannot win by extra iterations alone
@@ -243,10 +252,13 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         h_nfev = max_nfev if heldout_nfev is None else heldout_nfev
         base_even = refit(family, cur.applied, cur.params, rows=_rows(family, 0),
                           max_nfev=h_nfev)
-        for i, c in enumerate(remaining):
-            progress(f"candidates, round {len(rounds) + 1}", i, len(remaining))
-            trials.append(_try(family, cur, c, max_nfev, base_even, h_nfev))
-        progress(f"candidates, round {len(rounds) + 1}", len(remaining), len(remaining))
+        stage = f"candidates, round {len(rounds) + 1}"
+        # the candidates of a round are independent refits: side by side where possible
+        job = partial(_trial, family=family, base=cur, cands=tuple(remaining),
+                      max_nfev=max_nfev, base_even=base_even, heldout_nfev=h_nfev,
+                      stage=stage)
+        trials = parallel_map(job, len(remaining), progress, [stage], len(remaining))
+        progress(stage, len(remaining), len(remaining))
         rounds.append(tuple(trials))
         for t in trials:
             last[t.candidate.key] = t
