@@ -360,7 +360,7 @@ class BearingTerm(RecordTransfer):
             return r, np.stack(cols, axis=1)
         grid = jacobian_grid(self.prep.bins_hz, _J_TOP * self.freq_hz[-1])
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, lmap, self.transfer_bins(params))
+                                grid, self.transfer_bins(params), lmap)
         dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
@@ -383,16 +383,14 @@ def jacobian_grid(bins_hz: ArrF, top_hz: float, n_log: int = _J_LOG_POINTS) -> A
 
 def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
                        prep: PreparedRecording, params: ParamSet, names: Sequence[str],
-                       grid: ArrF, lmap: LogMap | None = None,
-                       h_bins: ArrC | None = None) -> ArrF:
+                       grid: ArrF, h_bins: ArrC, lmap: LogMap | None = None) -> ArrF:
     """``d y_model / d log p`` (n_names, n_h1): the bearing transfer's derivatives by the
-    adjoint method on ``grid`` (Hz), interpolated linearly onto every record bin (DC: the
-    lowest grid value), applied to the record's terminal spectra and resampled to the H1
-    rate (the periodic response of :func:`steady_output` is linear in the transfer).
-
-    With ``h_bins`` (the transfer (n_bins, 1, 3) on every record bin) the relative
-    sensitivity ``dH / H`` is interpolated and multiplied by ``h_bins``: it varies slowly
-    across the resonances that make ``dH`` itself change sign between grid points."""
+    adjoint method on ``grid`` (Hz), applied to the record's terminal spectra and resampled
+    to the H1 rate (the periodic response of :func:`steady_output` is linear in the
+    transfer). The relative sensitivity ``dH / H`` is interpolated linearly onto every
+    record bin (DC: the lowest grid value) and multiplied by ``h_bins``, the transfer
+    (n_bins, 1, 3) on every record bin: it varies slowly across the resonances that make
+    ``dH`` itself change sign between grid points."""
     v = values_of(params, spec, state, sources=True)
     hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v)
     dl = (lmap.at(params) if lmap is not None
@@ -403,12 +401,9 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
     i1 = np.clip(i0 + 1, 0, grid.size - 1)
     w = fi - i0
-    if h_bins is None:
-        dfine = dhx[..., i0] * (1 - w) + dhx[..., i1] * w        # (n_p, 3, n_bins)
-    else:
-        hgt = hg[:, 0, :].T                                       # (3, n_g)
-        rel = dhx / np.where(hgt == 0, 1.0, hgt)
-        dfine = (rel[..., i0] * (1 - w) + rel[..., i1] * w) * h_bins[:, 0, :].T
+    hgt = hg[:, 0, :].T                                           # (3, n_g)
+    rel = dhx / np.where(hgt == 0, 1.0, hgt)
+    dfine = (rel[..., i0] * (1 - w) + rel[..., i1] * w) * h_bins[:, 0, :].T   # (n_p, 3, n_b)
     dyb = np.einsum("jif,if->jf", dfine, prep.x_bins)
     return resample_periodic(dyb, prep.n_samples, prep.n_h1)
 
