@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -67,7 +69,9 @@ def test_unstable_model_is_rejected() -> None:
 
 
 def test_solver_status_checked(monkeypatch: pytest.MonkeyPatch) -> None:
-    # Clarabel stopped after one interior-point iteration cannot end "optimal"
+    # Clarabel stopped after one interior-point iteration cannot end "optimal", neither
+    # on the direct program nor through the cvxpy fallback
+    monkeypatch.setattr(enforce_mod, "_DIRECT", ({"max_iter": 1},))
     monkeypatch.setattr(enforce_mod, "_ATTEMPTS", (("norm", {"max_iter": 1}),))
     model = random_nonpassive(np.random.default_rng(3), "S", 2)
     with pytest.raises(SolverError, match="optimal"):
@@ -85,3 +89,28 @@ def test_iteration_limit_is_a_typed_error() -> None:
         pytest.fail("no model needing two programs found")
     with pytest.raises(PassivityError, match="not certified after 1"):
         enforce_passivity(model, max_iter=1)
+
+
+
+def test_direct_program_matches_cvxpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the direct Clarabel program (the dual of the least-norm problem) and the cvxpy
+    # formulation of the same cuts reach the same minimum (1e-4 relative), feasibly
+    for kind, seed in (("S", 5), ("Y", 6)):
+        model = random_nonpassive(np.random.default_rng(seed), kind, 3)
+        grabbed: list[tuple[Any, Any, Any]] = []
+        orig = enforce_mod._solve
+
+        def grab(setup: Any, a: Any, b: Any, _orig: Any = orig, _g: Any = grabbed) -> Any:
+            _g.append((setup, a, b))
+            return _orig(setup, a, b)
+
+        monkeypatch.setattr(enforce_mod, "_solve", grab)
+        enforce_passivity(model)
+        monkeypatch.setattr(enforce_mod, "_solve", orig)
+        setup, a, b = grabbed[0]
+        x_direct = orig(setup, a, b)
+        x_cvx = enforce_mod._solve_cvxpy(setup, a, b)
+        obj_d = np.linalg.norm(setup.r_blocks @ x_direct)
+        obj_c = np.linalg.norm(setup.r_blocks @ x_cvx)
+        assert abs(obj_d - obj_c) <= 1e-4 * obj_c
+        assert np.min(a @ x_direct - b) >= -1e-7

@@ -55,6 +55,7 @@ from scipy import sparse
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, SolverError
+from vfmodel.fitting._qp import DConstraint, solve_qp
 from vfmodel.fitting.passivity import PassivityReport, check_passivity
 
 FloatArray = NDArray[np.float64]
@@ -65,7 +66,7 @@ _MAX_NEW = 60  # new cut frequencies per program at most (from the grid)
 _NEAR = 1
 _DROP = 0.05  # cuts with more slack than this (relative to the response) are dropped
 _ALL_BELOW = 0
-_COMBOS = True
+_COMBOS = 3  # mixtures among at most this many of the lowest columns (cuts grow as k^2)
 _MAX_TARGET = 1e-3  # deepest cut margin (relative)
 _GRID_LOG = 1500  # log-spaced grid points over the poles +- 2 decades
 # Tikhonov term relative to the objective's scale: keeps directions the data barely sees
@@ -79,6 +80,15 @@ _ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("sumsq", _TOL),
     ("sumsq", {"static_regularization_constant": 1e-7, "max_step_fraction": 0.95}),
     ("norm", {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-6}),
+)
+
+
+# settings of the direct Clarabel program (the dual of a least-norm problem, whose
+# objective can be tiny: a relative gap only), tried in turn
+_DIRECT: tuple[dict[str, Any], ...] = (
+    {"tol_gap_abs": 1e-30, "tol_gap_rel": 1e-10, "tol_feas": 1e-9},
+    {"tol_gap_abs": 1e-30, "tol_gap_rel": 1e-8, "tol_feas": 1e-8,
+     "static_regularization_constant": 1e-7, "max_step_fraction": 0.95},
 )
 
 
@@ -183,15 +193,17 @@ def _pairs(
     singular pairs) and, when several are low, their mixtures (a_i + w a_j) / sqrt 2,
     w in {1, -1, j, -j}: near a matrix with several active eigenvalues (e.g. a nearly
     lossless S, all singular values at one) the supporting hyperplanes form a family that
-    the vectors alone sample too coarsely."""
+    the vectors alone sample too coarsely. Mixtures are formed among the ``_COMBOS`` most
+    violating columns only (columns come ordered worst first): with all of them, an
+    8-port model gave 120 cuts per frequency and programs of thousands of rows."""
     lo_l, lo_r = left[:, low], right[:, low]
     cols_l, cols_r = [lo_l], [lo_r]
-    if _COMBOS:
-        for i in range(lo_l.shape[1]):
-            for j in range(i + 1, lo_l.shape[1]):
-                for w in (1.0, -1.0, 1j, -1j):
-                    cols_l.append(((lo_l[:, i] + w * lo_l[:, j]) / np.sqrt(2))[:, None])
-                    cols_r.append(((lo_r[:, i] + w * lo_r[:, j]) / np.sqrt(2))[:, None])
+    k = min(lo_l.shape[1], _COMBOS)
+    for i in range(k):
+        for j in range(i + 1, k):
+            for w in (1.0, -1.0, 1j, -1j):
+                cols_l.append(((lo_l[:, i] + w * lo_l[:, j]) / np.sqrt(2))[:, None])
+                cols_r.append(((lo_r[:, i] + w * lo_r[:, j]) / np.sqrt(2))[:, None])
     return np.hstack(cols_l), np.hstack(cols_r)
 
 
@@ -483,7 +495,24 @@ def enforce(
 
 
 def _solve(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
-    """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x."""
+    """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x.
+
+    Clarabel directly (:mod:`vfmodel.fitting._qp`); cvxpy with the same solver only when
+    that ends without a solution."""
+    dc = None
+    if setup.perturb_d:
+        m = setup.model
+        last = np.arange(setup.n_b - 1, a.shape[1], setup.n_b)
+        bound = 1.0 - setup.margin if m.kind == "S" else setup.margin * setup.d_size
+        dc = DConstraint(m.kind, m.dd / setup.h0, last, float(setup.col[-1]), bound)
+    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _DIRECT)
+    if x is not None:
+        return x
+    return _solve_cvxpy(setup, a, b)
+
+
+def _solve_cvxpy(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
+    """The program of :func:`_solve` through cvxpy (forms and settings of _ATTEMPTS)."""
     import cvxpy
 
     x = cvxpy.Variable(a.shape[1])
