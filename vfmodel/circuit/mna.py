@@ -440,48 +440,64 @@ class MnaSystem:
             ``d h / d value`` for ``params`` (default: all :attr:`param_names`).
         """
         v = self.values(values)
+        sel = self._param_indices(params)
         sol = self.solve(freq_hz, self.input_matrix(inputs), self.output_matrix(outputs), v,
                          adjoint=True, method=method)
         assert sol.x is not None and sol.lam is not None
         s = np.asarray(2j * np.pi * _freq(freq_hz), dtype=np.complex128)
         _, dq = self._q(v)
-        # per triplet t: -lam[row_t] * coef_t * (s or 1) * x[col_t], summed per parameter:
-        # the products lam x of every triplet times two sparse (triplet x parameter)
+        # the stamp quantities whose derivatives are needed: the selected parameters and
+        # the mutual couplings of a selected inductor (M = k sqrt(L1 L2) depends on L1)
+        need = set(sel.tolist())
+        for mp, l1, l2 in zip(self.mut_params, self.mut_l1, self.mut_l2, strict=True):
+            if l1 in need or l2 in need:
+                need.add(int(mp))
+        need_a = np.asarray(sorted(need), dtype=np.intp)
+        col = np.full(len(self.param_names), -1, dtype=np.intp)
+        col[need_a] = np.arange(need_a.size)
+        # per triplet t: -lam[row_t] * coef_t * (s or 1) * x[col_t], summed per quantity:
+        # the products lam x of the needed triplets times two sparse (triplet x quantity)
         # matrices of the coefficients (G and C triplets), in frequency chunks
-        n_p = len(self.param_names)
-        n_t = self.t_row.size
+        tsel = np.flatnonzero(col[self.t_param] >= 0)
+        n_q = need_a.size
+        n_t = tsel.size
         n_o, n_i = sol.lam.shape[2], sol.x.shape[2]
-        jac = np.zeros((s.size, n_o, n_i, n_p), dtype=complex)
+        jac = np.zeros((s.size, n_o, n_i, n_q), dtype=complex)
         if n_t:
             tix = np.arange(n_t)
-            sel = [sp.csr_array((np.where(self.t_is_c == is_c, self.t_coef, 0.0),
-                                 (tix, self.t_param)), shape=(n_t, n_p))
-                   for is_c in (False, True)]
+            t_row, t_col = self.t_row[tsel], self.t_col[tsel]
+            t_is_c, t_q = self.t_is_c[tsel], col[self.t_param[tsel]]
+            mats = [sp.csr_array((np.where(t_is_c == is_c, self.t_coef[tsel], 0.0),
+                                  (tix, t_q)), shape=(n_t, n_q))
+                    for is_c in (False, True)]
             step = max(1, _CHUNK_BYTES // (32 * n_o * n_i * n_t))
             for a in range(0, s.size, step):
-                lr = np.swapaxes(sol.lam[a:a + step, self.t_row, :], 1, 2)   # (f, o, t)
-                xc = np.swapaxes(sol.x[a:a + step, self.t_col, :], 1, 2)     # (f, i, t)
+                lr = np.swapaxes(sol.lam[a:a + step, t_row, :], 1, 2)        # (f, o, t)
+                xc = np.swapaxes(sol.x[a:a + step, t_col, :], 1, 2)          # (f, i, t)
                 prod = (lr[:, :, None, :] * xc[:, None, :, :]).reshape(-1, n_t)
-                jg, jc = (np.asarray(prod @ m).reshape(-1, n_o, n_i, n_p) for m in sel)
+                jg, jc = (np.asarray(prod @ m).reshape(-1, n_o, n_i, n_q) for m in mats)
                 jac[a:a + step] = -(jg + s[a:a + step, None, None, None] * jc)
         dsl = jac.copy()                                      # d h / d q
-        jac *= dq
+        jac *= dq[need_a]
         if self.mut_params.size:
             # M = k sqrt(L1 L2): dM/dL1 = M / (2 L1), dM/dL2 = M / (2 L2)
             m = v[self.mut_params] * np.sqrt(np.abs(v[self.mut_l1] * v[self.mut_l2]))
             for mp, l1, l2, mm in zip(self.mut_params, self.mut_l1, self.mut_l2, m,
                                       strict=True):
-                jac[..., l1] += dsl[..., mp] * mm / (2 * v[l1])
-                jac[..., l2] += dsl[..., mp] * mm / (2 * v[l2])
-        if params is not None:
-            index = {n: i for i, n in enumerate(self.param_names)}
-            try:
-                sel = [index[p] for p in params]
-            except KeyError as err:
-                raise CircuitError(f"{err.args[0]!r} is not a parameter of the circuit") \
-                    from None
-            jac = jac[..., sel]
-        return sol.h, jac
+                for li in (l1, l2):
+                    if col[li] >= 0:
+                        jac[..., col[li]] += dsl[..., col[mp]] * mm / (2 * v[li])
+        return sol.h, jac[..., col[sel]]
+
+    def _param_indices(self, params: Sequence[str] | None) -> ArrI:
+        """Indices of ``params`` in :attr:`param_names` (all when None)."""
+        if params is None:
+            return np.arange(len(self.param_names), dtype=np.intp)
+        index = {n: i for i, n in enumerate(self.param_names)}
+        try:
+            return np.asarray([index[p] for p in params], dtype=np.intp)
+        except KeyError as err:
+            raise CircuitError(f"{err.args[0]!r} is not a parameter of the circuit") from None
 
     def ac(self, freq_hz: ArrayLike, outputs: Sequence[Probe],
            values: Mapping[str, float] | ArrayLike | None = None, *,
