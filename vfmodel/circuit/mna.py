@@ -21,7 +21,7 @@ Stamps (branch current ``i_b`` flows from n+ through the element to n-):
 Sensitivities use the adjoint method: with ``x = A^-1 B`` and ``lambda = A^-T Cout``,
 ``dH/dp = -lambda^T (dG/dp + s dC/dp) x`` for all frequencies at once.
 
-Solvers (``method``): ``dense`` (batched LAPACK, N <= 100) and ``sparse`` (SuperLU per
+Solvers (``method``): ``dense`` (batched LAPACK, N <= 40) and ``sparse`` (SuperLU per
 frequency) are direct and exact to rounding; ``auto`` picks one of them by size.
 ``hessenberg`` (module ``_hessenberg``) reduces the shifted pencil once to Hessenberg form
 and then costs O(N^2) per frequency. The ``modal`` solver factorises once per parameter
@@ -65,7 +65,7 @@ from vfmodel.circuit.netlist import Circuit, Excitation, Probe
 from vfmodel.errors import CircuitError, InputError
 
 SolveMethod = Literal["auto", "dense", "sparse", "hessenberg", "modal"]
-_DENSE_MAX = 100          # unknowns up to which "auto" uses the dense batched solver
+_DENSE_MAX = 40           # unknowns up to which "auto" uses the dense batched solver (see solve)
 _CHUNK_BYTES = 64 << 20   # memory for one batch of adjoint products
 
 _BRANCH_KINDS = ("inductor", "vsource", "switch", "vcvs", "ccvs")
@@ -387,7 +387,12 @@ class MnaSystem:
     def solve(self, freq_hz: ArrayLike, b: ArrF, cout: ArrF,
               values: Mapping[str, float] | ArrayLike | None = None, *,
               adjoint: bool = False, method: SolveMethod = "auto") -> Solution:
-        """Solve for all frequencies: ``H = Cout^T (G + sC)^-1 B`` (and x, lambda if adjoint)."""
+        """Solve for all frequencies: ``H = Cout^T (G + sC)^-1 B`` (and x, lambda if adjoint).
+
+        ``auto``: batched dense LU up to :data:`_DENSE_MAX` unknowns, sparse LU above.
+        Measured (one BLAS thread, 200-300 frequencies, with the adjoint): random RLC
+        networks of 40 unknowns 12 vs 13 ms, 58 unknowns 25 vs 18 ms; the grey-box
+        networks of the detective (78-96 unknowns) 2.3-3.5x faster sparse."""
         f = _freq(freq_hz)
         g, c = self.matrices(values)
         s = np.asarray(2j * np.pi * f, dtype=np.complex128)

@@ -84,6 +84,14 @@ def dlogv_dlogp(params: ParamSet, names: Sequence[str], spec: NetSpec,
     return np.stack(cols, axis=1) if cols else np.zeros((v0.size, 0))
 
 
+def _chain(dv: ArrC, v: ArrF, dl: ArrF) -> ArrC:
+    """``d h / d log p = sum_e (d h / d v_e) v_e (d log v_e / d log p)``: (..., n_e) with
+    (n_e,) and (n_e, n_p) -> (..., n_p), as one matrix product (a three-operand einsum
+    runs an unblocked loop, 12x slower on the record Jacobians)."""
+    return np.asarray(((dv * v).reshape(-1, v.size) @ dl).reshape(*dv.shape[:-1], -1),
+                      dtype=complex)
+
+
 def _used_elements(dl: ArrF) -> NDArray[np.intp]:
     """Elements whose value depends on at least one fitted parameter (rows of ``dl`` that
     are not zero): the only columns of the network Jacobian a term needs."""
@@ -179,7 +187,7 @@ class ImpedanceTerm:
         r = np.concatenate([lr.real.ravel(), lr.imag.ravel()])
         if not jac:
             return r, None
-        dzx = np.einsum("fte,e,ej->ftj", dzd, v[used], dl[used])
+        dzx = _chain(dzd, v[used], dl[used])                          # (f, t, n_names)
         if fix and "fixture.L" in names:
             j = list(names).index("fixture.L")
             dzx[:, :, j] += 2j * np.pi * self.freq_hz[:, None] * params["fixture.L"]
@@ -406,7 +414,7 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     used = _used_elements(dl)
     hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v,
                                        params=[mna.param_names[e] for e in used])
-    dhx = np.einsum("fie,e,ej->jif", dh[:, 0, :, :], v[used], dl[used])   # (n_p, 3, n_g)
+    dhx = _chain(dh[:, 0, :, :], v[used], dl[used]).transpose(2, 1, 0)    # (n_p, 3, n_g)
     fb = prep.bins_hz
     fi = np.interp(fb, grid, np.arange(grid.size))
     i0 = np.clip(np.floor(fi).astype(int), 0, grid.size - 1)
@@ -415,7 +423,7 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     hgt = hg[:, 0, :].T                                           # (3, n_g)
     rel = dhx / np.where(hgt == 0, 1.0, hgt)
     dfine = (rel[..., i0] * (1 - w) + rel[..., i1] * w) * h_bins[:, 0, :].T   # (n_p, 3, n_b)
-    dyb = np.einsum("jif,if->jf", dfine, prep.x_bins)
+    dyb = sum(dfine[:, i] * prep.x_bins[i] for i in range(prep.x_bins.shape[0]))
     return resample_periodic(dyb, prep.n_samples, prep.n_h1)
 
 
