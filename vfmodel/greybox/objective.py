@@ -88,7 +88,10 @@ def _chain(dv: ArrC, v: ArrF, dl: ArrF) -> ArrC:
     """``d h / d log p = sum_e (d h / d v_e) v_e (d log v_e / d log p)``: (..., n_e) with
     (n_e,) and (n_e, n_p) -> (..., n_p), as one matrix product (a three-operand einsum
     runs an unblocked loop, 12x slower on the record Jacobians)."""
-    return np.asarray(((dv * v).reshape(-1, v.size) @ dl).reshape(*dv.shape[:-1], -1),
+    if v.size == 0:              # no element moves (e.g. only the fixture inductance)
+        return np.zeros((*dv.shape[:-1], dl.shape[1]), dtype=complex)
+    lead = dv.shape[:-1]
+    return np.asarray(((dv * v).reshape(-1, v.size) @ dl).reshape(*lead, dl.shape[1]),
                       dtype=complex)
 
 
