@@ -9,6 +9,7 @@ from benches.random_networks import random_rlc_network
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.circuit.poles import network_poles
+from vfmodel.errors import InputError
 
 F = np.logspace(2, 7, 60)
 
@@ -254,3 +255,25 @@ def test_sparse_factorisation_fallback_gives_the_same_solution(
             assert np.max(np.abs(got - want)) <= 1e-9 * np.max(np.abs(want))
         if fast is rejects:
             assert solvers._GSTRF is None    # a rejecting entry point is not tried again
+
+
+def test_diagonal_jacobian_is_the_diagonal_of_the_full_one() -> None:
+    # port input impedances only (the grey-box impedance term): the same numbers as the
+    # diagonal of the full transfer-impedance Jacobian, which the complex-step test checks
+    c = Circuit().add_vsource("V1", "in", "0").add_resistor("Rs", "in", "x0", 50.0)
+    for k in range(1, 6):
+        c = c.add_inductor(f"lad.{k}.L", f"x{k - 1}", f"x{k}", 1e-6 * k)
+        c = c.add_capacitor(f"lad.{k}.C", f"x{k}", "0", 1e-9)
+        c = c.add_resistor(f"lad.{k}.R", f"x{k}", "0", 200.0 * k)
+    c = c.add_mutual("lad.K", "lad.1.L", "lad.3.L", 0.3)
+    ports = [("x1", "0"), ("x3", "x4"), ("x5", "0")]
+    names = ["lad.1.L", "lad.4.C", "lad.K", "Rs"]
+    h, full = c.mna.response_and_jacobian(F, ports, ports, params=names)
+    hd, diag = c.mna.response_and_jacobian(F, ports, ports, params=names, diagonal=True)
+    assert diag.shape == (F.size, 3, 4)
+    np.testing.assert_allclose(hd, h, rtol=1e-13, atol=0)
+    for k in range(3):
+        ref = full[:, k, k, :]
+        assert np.max(np.abs(diag[:, k, :] - ref)) <= 1e-12 * np.max(np.abs(ref))
+    with pytest.raises(InputError, match="diagonal"):
+        c.mna.response_and_jacobian(F, ports, ports[:2], diagonal=True)

@@ -435,6 +435,7 @@ class MnaSystem:
         self, freq_hz: ArrayLike, inputs: Sequence[Excitation], outputs: Sequence[Probe],
         values: Mapping[str, float] | ArrayLike | None = None, *,
         params: Sequence[str] | None = None, method: SolveMethod = "auto",
+        diagonal: bool = False,
     ) -> tuple[ArrC, ArrC]:
         """Response and its derivatives by the adjoint method.
 
@@ -442,8 +443,14 @@ class MnaSystem:
         -------
         h : (n_freq, n_out, n_in) complex
         jac : (n_freq, n_out, n_in, n_params) complex
-            ``d h / d value`` for ``params`` (default: all :attr:`param_names`).
+            ``d h / d value`` for ``params`` (default: all :attr:`param_names`); with
+            ``diagonal`` (as many outputs as inputs) only ``d h[:, k, k] / d value``,
+            shape (n_freq, n_out, n_params): the input impedances of several ports
+            without the transfer impedances between them.
         """
+        if diagonal and len(inputs) != len(outputs):
+            raise InputError("diagonal: needs as many outputs as inputs",
+                             found=f"{len(outputs)} outputs, {len(inputs)} inputs")
         v = self.values(values)
         sel = self._param_indices(params)
         sol = self.solve(freq_hz, self.input_matrix(inputs), self.output_matrix(outputs), v,
@@ -467,7 +474,8 @@ class MnaSystem:
         n_q = need_a.size
         n_t = tsel.size
         n_o, n_i = sol.lam.shape[2], sol.x.shape[2]
-        jac = np.zeros((s.size, n_o, n_i, n_q), dtype=complex)
+        pair_shape = (n_o,) if diagonal else (n_o, n_i)
+        jac = np.zeros((s.size, *pair_shape, n_q), dtype=complex)
         if n_t:
             tix = np.arange(n_t)
             t_row, t_col = self.t_row[tsel], self.t_col[tsel]
@@ -475,13 +483,15 @@ class MnaSystem:
             mats = [sp.csr_array((np.where(t_is_c == is_c, self.t_coef[tsel], 0.0),
                                   (tix, t_q)), shape=(n_t, n_q))
                     for is_c in (False, True)]
-            step = max(1, _CHUNK_BYTES // (32 * n_o * n_i * n_t))
+            step = max(1, _CHUNK_BYTES // (32 * int(np.prod(pair_shape)) * n_t))
+            s_b = s.reshape(-1, *([1] * (len(pair_shape) + 1)))
             for a in range(0, s.size, step):
                 lr = np.swapaxes(sol.lam[a:a + step, t_row, :], 1, 2)        # (f, o, t)
                 xc = np.swapaxes(sol.x[a:a + step, t_col, :], 1, 2)          # (f, i, t)
-                prod = (lr[:, :, None, :] * xc[:, None, :, :]).reshape(-1, n_t)
-                jg, jc = (np.asarray(prod @ m).reshape(-1, n_o, n_i, n_q) for m in mats)
-                jac[a:a + step] = -(jg + s[a:a + step, None, None, None] * jc)
+                prod = (lr * xc if diagonal
+                        else lr[:, :, None, :] * xc[:, None, :, :]).reshape(-1, n_t)
+                jg, jc = (np.asarray(prod @ m).reshape(-1, *pair_shape, n_q) for m in mats)
+                jac[a:a + step] = -(jg + s_b[a:a + step] * jc)
         dsl = jac.copy()                                      # d h / d q
         jac *= dq[need_a]
         if self.mut_params.size:

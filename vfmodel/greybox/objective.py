@@ -174,12 +174,11 @@ class ImpedanceTerm:
             dl = (lmap.at(params) if lmap is not None
                   else dlogv_dlogp(params, names, self.spec, "standstill"))
             used = _used_elements(dl)
-            z, dz = self.mna.response_and_jacobian(
+            z, dzd = self.mna.response_and_jacobian(
                 self.freq_hz, pairs, pairs, v,
-                params=[self.mna.param_names[e] for e in used])
+                params=[self.mna.param_names[e] for e in used], diagonal=True)
             idx = np.arange(nt)
-            zd = z[:, idx, idx]
-            dzd = dz[:, idx, idx, :]                                  # (f, t, used)
+            zd = z[:, idx, idx]                                       # dzd: (f, t, used)
         else:
             z = self.mna.response(self.freq_hz, pairs, pairs, v)
             zd = np.stack([z[:, i, i] for i in range(nt)], axis=1)
