@@ -129,14 +129,20 @@ def test_adjoint_sensitivities_match_forward_complex_step(method: str) -> None:
     assert any(c.element(n).kind == "mutual" for n in mna.param_names)
 
 
-def test_adjoint_matches_central_differences_on_ladder() -> None:
-    # a well-conditioned RLC ladder with coupling, where central differences reach ~1e-9
+def _coupled_ladder() -> Circuit:
+    """A well-conditioned RLC ladder with a mutual coupling of two of its inductors."""
     c = Circuit().add_vsource("V1", "in", "0").add_resistor("Rs", "in", "x0", 50.0)
     for k in range(1, 6):
         c = c.add_inductor(f"lad.{k}.L", f"x{k - 1}", f"x{k}", 1e-6 * k)
         c = c.add_capacitor(f"lad.{k}.C", f"x{k}", "0", 1e-9)
         c = c.add_resistor(f"lad.{k}.R", f"x{k}", "0", 200.0 * k)
     c = c.add_mutual("lad.K", "lad.1.L", "lad.3.L", 0.3)
+    return c
+
+
+def test_adjoint_matches_central_differences_on_ladder() -> None:
+    # a well-conditioned RLC ladder with coupling, where central differences reach ~1e-9
+    c = _coupled_ladder()
     inputs, outputs = ["V1"], ["x5", "i(V1)"]
     _, jac = c.mna.response_and_jacobian(F, inputs, outputs)
     ref = _central_diff(c.mna, inputs, outputs, c.mna.values0)
@@ -158,12 +164,7 @@ def test_jacobian_subset_with_coupled_inductor() -> None:
     # a selected inductor coupled by a mutual: its column includes dM/dL (M = k sqrt(L1 L3))
     # though the coupling itself is not selected; reference: the full Jacobian, which
     # test_adjoint_matches_central_differences_on_ladder checks against differences
-    c = Circuit().add_vsource("V1", "in", "0").add_resistor("Rs", "in", "x0", 50.0)
-    for k in range(1, 6):
-        c = c.add_inductor(f"lad.{k}.L", f"x{k - 1}", f"x{k}", 1e-6 * k)
-        c = c.add_capacitor(f"lad.{k}.C", f"x{k}", "0", 1e-9)
-        c = c.add_resistor(f"lad.{k}.R", f"x{k}", "0", 200.0 * k)
-    c = c.add_mutual("lad.K", "lad.1.L", "lad.3.L", 0.3)
+    c = _coupled_ladder()
     names = ["lad.3.L", "lad.2.C", "lad.K"]
     _, full = c.mna.response_and_jacobian(F, ["V1"], ["x5", "i(V1)"])
     _, sub = c.mna.response_and_jacobian(F, ["V1"], ["x5", "i(V1)"], params=names)
@@ -260,12 +261,7 @@ def test_sparse_factorisation_fallback_gives_the_same_solution(
 def test_diagonal_jacobian_is_the_diagonal_of_the_full_one() -> None:
     # port input impedances only (the grey-box impedance term): the same numbers as the
     # diagonal of the full transfer-impedance Jacobian, which the complex-step test checks
-    c = Circuit().add_vsource("V1", "in", "0").add_resistor("Rs", "in", "x0", 50.0)
-    for k in range(1, 6):
-        c = c.add_inductor(f"lad.{k}.L", f"x{k - 1}", f"x{k}", 1e-6 * k)
-        c = c.add_capacitor(f"lad.{k}.C", f"x{k}", "0", 1e-9)
-        c = c.add_resistor(f"lad.{k}.R", f"x{k}", "0", 200.0 * k)
-    c = c.add_mutual("lad.K", "lad.1.L", "lad.3.L", 0.3)
+    c = _coupled_ladder()
     ports = [("x1", "0"), ("x3", "x4"), ("x5", "0")]
     names = ["lad.1.L", "lad.4.C", "lad.K", "Rs"]
     h, full = c.mna.response_and_jacobian(F, ports, ports, params=names)
