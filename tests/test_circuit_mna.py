@@ -9,6 +9,7 @@ from benches.random_networks import random_rlc_network
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.netlist import Circuit
 from vfmodel.circuit.poles import network_poles
+from vfmodel.errors import InputError
 
 F = np.logspace(2, 7, 60)
 
@@ -128,14 +129,20 @@ def test_adjoint_sensitivities_match_forward_complex_step(method: str) -> None:
     assert any(c.element(n).kind == "mutual" for n in mna.param_names)
 
 
-def test_adjoint_matches_central_differences_on_ladder() -> None:
-    # a well-conditioned RLC ladder with coupling, where central differences reach ~1e-9
+def _coupled_ladder() -> Circuit:
+    """A well-conditioned RLC ladder with a mutual coupling of two of its inductors."""
     c = Circuit().add_vsource("V1", "in", "0").add_resistor("Rs", "in", "x0", 50.0)
     for k in range(1, 6):
         c = c.add_inductor(f"lad.{k}.L", f"x{k - 1}", f"x{k}", 1e-6 * k)
         c = c.add_capacitor(f"lad.{k}.C", f"x{k}", "0", 1e-9)
         c = c.add_resistor(f"lad.{k}.R", f"x{k}", "0", 200.0 * k)
     c = c.add_mutual("lad.K", "lad.1.L", "lad.3.L", 0.3)
+    return c
+
+
+def test_adjoint_matches_central_differences_on_ladder() -> None:
+    # a well-conditioned RLC ladder with coupling, where central differences reach ~1e-9
+    c = _coupled_ladder()
     inputs, outputs = ["V1"], ["x5", "i(V1)"]
     _, jac = c.mna.response_and_jacobian(F, inputs, outputs)
     ref = _central_diff(c.mna, inputs, outputs, c.mna.values0)
@@ -148,8 +155,23 @@ def test_jacobian_subset_of_params() -> None:
     names = [c.param_names[3], c.param_names[0]]
     _, full = c.mna.response_and_jacobian(F, ["V1"], ["n2"])
     _, sub = c.mna.response_and_jacobian(F, ["V1"], ["n2"], params=names)
-    np.testing.assert_array_equal(sub[..., 0], full[..., 3])
-    np.testing.assert_array_equal(sub[..., 1], full[..., 0])
+    # only the selected parameters' triplets are summed: same values up to rounding
+    np.testing.assert_allclose(sub[..., 0], full[..., 3], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(sub[..., 1], full[..., 0], rtol=1e-12, atol=0)
+
+
+def test_jacobian_subset_with_coupled_inductor() -> None:
+    # a selected inductor coupled by a mutual: its column includes dM/dL (M = k sqrt(L1 L3))
+    # though the coupling itself is not selected; reference: the full Jacobian, which
+    # test_adjoint_matches_central_differences_on_ladder checks against differences
+    c = _coupled_ladder()
+    names = ["lad.3.L", "lad.2.C", "lad.K"]
+    _, full = c.mna.response_and_jacobian(F, ["V1"], ["x5", "i(V1)"])
+    _, sub = c.mna.response_and_jacobian(F, ["V1"], ["x5", "i(V1)"], params=names)
+    for j, n in enumerate(names):
+        k = c.mna.param_names.index(n)
+        scale = np.max(np.abs(full[..., k]))
+        assert np.max(np.abs(sub[..., j] - full[..., k])) <= 1e-12 * scale, n
 
 
 def test_poles_series_rlc_analytic() -> None:
@@ -205,3 +227,49 @@ def test_poles_are_poles_of_the_response() -> None:
     for pk in p:
         sv = np.linalg.svd(g + pk * cm, compute_uv=False)
         assert sv[-1] / sv[0] < 1e-9
+
+
+def test_sparse_factorisation_fallback_gives_the_same_solution(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # _splu calls SuperLU's factorisation directly; when that private entry point is
+    # missing or rejects its arguments (another SciPy) it falls back to splu: the three
+    # paths must agree with the batched dense solve to rounding
+    import vfmodel.circuit._solvers as solvers
+
+    c = random_rlc_network(np.random.default_rng(11), n_nodes=9, n_elements=24)
+    g, cm = c.mna.matrices()
+    s = 2j * np.pi * F
+    b = c.mna.input_matrix(["V1"])
+    cout = c.mna.output_matrix(["n3", "i(V1)"])
+    ref = solvers.solve_dense(g, cm, s, b, cout, True)
+
+    def rejects(*_a: object, **_k: object) -> None:
+        raise TypeError("signature changed")
+
+    assert solvers._GSTRF is not None    # this SciPy has the fast path
+    for fast in (solvers._GSTRF, rejects, None):
+        monkeypatch.setattr(solvers, "_GSTRF", fast)
+        sol = solvers.solve_sparse(g, cm, s, b, cout, True)
+        assert sol.x is not None and sol.lam is not None
+        assert ref.x is not None and ref.lam is not None
+        for got, want in ((sol.h, ref.h), (sol.x, ref.x), (sol.lam, ref.lam)):
+            assert np.max(np.abs(got - want)) <= 1e-9 * np.max(np.abs(want))
+        if fast is rejects:
+            assert solvers._GSTRF is None    # a rejecting entry point is not tried again
+
+
+def test_diagonal_jacobian_is_the_diagonal_of_the_full_one() -> None:
+    # port input impedances only (the grey-box impedance term): the same numbers as the
+    # diagonal of the full transfer-impedance Jacobian, which the complex-step test checks
+    c = _coupled_ladder()
+    ports = [("x1", "0"), ("x3", "x4"), ("x5", "0")]
+    names = ["lad.1.L", "lad.4.C", "lad.K", "Rs"]
+    h, full = c.mna.response_and_jacobian(F, ports, ports, params=names)
+    hd, diag = c.mna.response_and_jacobian(F, ports, ports, params=names, diagonal=True)
+    assert diag.shape == (F.size, 3, 4)
+    np.testing.assert_allclose(hd, h, rtol=1e-13, atol=0)
+    for k in range(3):
+        ref = full[:, k, k, :]
+        assert np.max(np.abs(diag[:, k, :] - ref)) <= 1e-12 * np.max(np.abs(ref))
+    with pytest.raises(InputError, match="diagonal"):
+        c.mna.response_and_jacobian(F, ports, ports[:2], diagonal=True)

@@ -54,6 +54,54 @@ def test_pole_residue_transfer_matches_direct_solves(state: str) -> None:
     assert np.max(np.abs(h - ref)) < 1e-7 * np.max(np.abs(ref))
 
 
+def test_checked_form_passes_from_the_lowest_passing_check_upwards() -> None:
+    # _checked_form's valid-from frequency by its definition: the lowest check frequency
+    # from which every check frequency at and above it meets the tolerance. A tolerance
+    # between the form's smallest and largest check errors makes it fail somewhere;
+    # reference: the errors computed here against direct solves
+    from vfmodel.circuit.transfer import _F_CHECK_HZ, _checked_form
+
+    c = build_network(P0, state="rotating", sources=True)
+    mna = c.mna
+    b, cout = mna.input_matrix(list(SOURCES)), mna.output_matrix([BEARING_NODE])
+    fc = np.asarray(_F_CHECK_HZ)
+    pr, _ = _checked_form(mna, b, cout, mna.values0, fc, 1e10, 1e-5)
+    assert pr is not None
+    ref = mna.solve(fc, b, cout, method="dense").h
+    err = np.linalg.norm(pr(fc) - ref, axis=(1, 2)) / np.max(np.linalg.norm(ref, axis=(1, 2)))
+    for tol in np.sort(err)[:-1] * 1.5:
+        _, valid_from = _checked_form(mna, b, cout, mna.values0, fc, 1e10, float(tol))
+        ok = err <= tol
+        want = next((float(fc[k]) for k in range(fc.size) if np.all(ok[k:])), np.inf)
+        assert valid_from == want, (tol, err)
+
+
+def test_transfer_solves_directly_only_below_the_valid_band(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # a form that passes only from 100 kHz up: transfer_on takes it there and direct
+    # solves below (reference: direct solves at every frequency, to the check tolerance)
+    import vfmodel.circuit.transfer as tr
+
+    c = build_network(P0, state="rotating", sources=True)
+    mna = c.mna
+    b, cout = mna.input_matrix(list(SOURCES)), mna.output_matrix([BEARING_NODE])
+    pr, _ = tr._checked_form(mna, b, cout, mna.values0, tr._F_CHECK_HZ, 1e10, 1e-5)
+    monkeypatch.setattr(tr, "_checked_form", lambda *a, **k: (pr, 1e5))
+    solved: list[np.ndarray] = []
+    solve = type(mna).solve
+
+    def spy(self: object, f: np.ndarray, *a: object, **k: object) -> object:
+        solved.append(np.atleast_1d(f))
+        return solve(self, f, *a, **k)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(type(mna), "solve", spy)
+    f = np.arange(0, 2001) * 5e3
+    h = tr.transfer_on(mna, b, cout, mna.values0, f)
+    assert len(solved) == 1 and np.array_equal(solved[0], f[f < 1e5])
+    ref = solve(mna, f, b, cout, mna.values0).h
+    assert np.max(np.abs(h - ref)) <= 1e-5 * np.max(np.abs(ref))
+
+
 def test_sections_keep_low_frequency_totals() -> None:
     f = np.array([200.0])
     pairs = [TOPOLOGY_PORTS[t] for t in ("U-Frame", "U-V")]

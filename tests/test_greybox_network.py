@@ -192,3 +192,18 @@ def test_network_values_without_rebuilding_the_netlist(state: str, n_sections: i
                             sources=True).param_values
         got = network_values(p, eff, state, n_sections=n_sections)  # type: ignore[arg-type]
         np.testing.assert_array_equal(got, ref)
+
+
+def test_log_chain_rule_equals_its_definition() -> None:
+    # objective._chain: sum_e dH/dv_e v_e dlog v_e/dlog p_j as a matrix product; reference:
+    # the same sum written as an einsum; with no element moved (e.g. only the fixture
+    # inductance fitted) the derivatives are zero, not an error
+    from vfmodel.greybox.objective import _chain
+
+    rng = np.random.default_rng(3)
+    dv = rng.normal(size=(7, 3, 5)) + 1j * rng.normal(size=(7, 3, 5))
+    v, dl = rng.random(5), rng.random((5, 4))
+    ref = np.einsum("fie,e,ej->fij", dv, v, dl)
+    assert np.max(np.abs(_chain(dv, v, dl) - ref)) <= 1e-12 * np.max(np.abs(ref))
+    empty = _chain(dv[..., :0], v[:0], dl[:0])
+    assert empty.shape == (7, 3, 4) and not np.any(empty)

@@ -32,6 +32,7 @@ SCRIPT = textwrap.dedent("""
         os.environ["VFMODEL_WORKERS"] = w
         out["workers" + w] = workers(2)
         out["map" + w] = parallel_map(job, 3)
+        out["first" + w] = parallel_map(job, 3, first=[2])
         idf = identify(ds)
         out["params" + w] = [float(v) for v in idf.params.values]
         out["chi2" + w] = [s.chi2_red for s in idf.stages]
@@ -49,6 +50,8 @@ def test_forked_fits_equal_the_sequential_ones(tmp_path: Path) -> None:
     assert out["workers1"] == 1 and out["workers2"] == 2
     # order kept; in sequence the parent runs the jobs, with 2 workers other processes
     assert [k for k, _ in out["map1"]] == [0, 1, 2] == [k for k, _ in out["map2"]]
+    # a job handed out first: results still in index order
+    assert [k for k, _ in out["first1"]] == [0, 1, 2] == [k for k, _ in out["first2"]]
     assert {pid for _, pid in out["map1"]} == {out["parent"]}
     assert out["parent"] not in {pid for _, pid in out["map2"]}
     # the same arithmetic in another process: identical to rounding (1e-12 relative)
@@ -56,3 +59,12 @@ def test_forked_fits_equal_the_sequential_ones(tmp_path: Path) -> None:
         assert abs(a - b) <= 1e-12 * max(abs(a), 1e-300), (a, b)
     for a, b in zip(out["chi21"], out["chi22"], strict=True):
         assert abs(a - b) <= 1e-12 * abs(a), (a, b)
+
+
+def test_first_must_name_jobs() -> None:
+    import pytest
+
+    from vfmodel.core.parallel import parallel_map
+
+    with pytest.raises(ValueError, match="first"):
+        parallel_map(lambda k, _p: k, 3, first=[3])

@@ -130,9 +130,8 @@ def solve_sparse(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) 
             np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
             patterns[dc_only] = (g[rows, cols], c[rows, cols], rows.astype(np.intc), indptr)
         gv, cv, ind, ptr = patterns[dc_only]
-        a = sp.csc_array((gv + sk * cv, ind, ptr), shape=(n, n))
         try:
-            lu = spla.splu(a)
+            lu = _splu(gv + sk * cv, ind, ptr, n)
         except RuntimeError:
             raise _singular(f"at {sk.imag / 2 / np.pi:.6g} Hz") from None
         xk = lu.solve(bc)
@@ -141,6 +140,32 @@ def solve_sparse(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) 
             x[k] = xk
             lam[k] = lu.solve(cc, trans="T")
     return Solution(h, x, lam, "sparse")
+
+
+def _splu(vals: ArrC, ind: NDArray[np.intc], ptr: NDArray[np.intc], n: int) -> Any:
+    """SuperLU factorisation of the canonical CSC matrix ``(vals, ind, ptr)``.
+
+    Calls SuperLU's factorisation (``scipy.sparse.linalg._dsolve._superlu.gstrf``, the
+    function :func:`scipy.sparse.linalg.splu` ends in, same default options) directly:
+    ``splu`` first builds a sparse array and checks its format, which on the ~120-unknown
+    grey-box networks costs 40 % of the factorisation itself (measured: 93 us vs 132 us
+    per frequency for factorisation and two solves). The arrays built here are canonical by
+    construction. Falls back to ``splu`` when that private entry point is missing or its
+    signature differs (another SciPy version)."""
+    global _GSTRF
+    if _GSTRF is not None:
+        try:
+            return _GSTRF(n, vals.size, vals, ind, ptr, csc_construct_func=sp.csc_array,
+                          ilu=False, options={})
+        except TypeError:
+            _GSTRF = None
+    return spla.splu(sp.csc_array((vals, ind, ptr), shape=(n, n)))
+
+
+try:  # the private entry point of splu (see _splu); absent -> the public path
+    from scipy.sparse.linalg._dsolve._superlu import gstrf as _GSTRF
+except ImportError:  # pragma: no cover - other SciPy layouts
+    _GSTRF = None
 
 
 def spot_check(h: ArrC, g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF) -> bool:

@@ -23,7 +23,7 @@ doi:10.1080/01621459.1995.10476572 (BIC difference > 10: very strong evidence)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 import numpy as np
@@ -123,7 +123,10 @@ def _with_candidate(params: ParamSet, cand: Candidate) -> ParamSet:
 
 
 def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int,
-         base_even: FitResult, heldout_nfev: int) -> Trial:
+         base_even: FitResult | None, heldout_nfev: int) -> Trial:
+    """The candidate's trial; without ``base_even`` (computed side by side, see
+    :func:`_round_job`) ``heldout_delta_chi2`` holds the candidate's held-out chi-square
+    alone, from which the caller subtracts the base's."""
     applied = (*base.applied, cand)
     p0 = _with_candidate(base.params, cand)
     new = tuple(s.name for s in cand.params)
@@ -143,8 +146,8 @@ def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int,
     # optimum), scored on the odd ones; the base's even fit is shared by a round
     ev, od = _rows(family, 0), _rows(family, 1)
     c_ev = refit(family, applied, full.params, rows=ev, max_nfev=heldout_nfev)
-    ho = float(c_ev.residual[od] @ c_ev.residual[od]
-               - base_even.residual[od] @ base_even.residual[od])
+    ho = float(c_ev.residual[od] @ c_ev.residual[od]) - \
+        (0.0 if base_even is None else _odd_chi2(family, base_even))
     idx = [full.names.index(n) for n in new if n in full.names]
     mc, cw = 0.0, ""
     for i in idx:
@@ -156,12 +159,23 @@ def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int,
                  {n: full.rel_std[n] for n in new if n in full.rel_std})
 
 
-def _trial(i: int, prog: Progress, *, family: Family, base: FitResult,
-           cands: tuple[Candidate, ...], max_nfev: int, base_even: FitResult,
-           heldout_nfev: int, stage: str) -> Trial:
-    """Candidate ``i`` of a round (a job of :func:`vfmodel.core.parallel.parallel_map`)."""
-    prog(stage, i, len(cands))
-    return _try(family, base, cands[i], max_nfev, base_even, heldout_nfev)
+def _odd_chi2(family: Family, fit: FitResult) -> float:
+    """Chi-square of ``fit`` on the held-out (odd) points."""
+    od = _rows(family, 1)
+    return float(fit.residual[od] @ fit.residual[od])
+
+
+def _round_job(i: int, prog: Progress, *, family: Family, base: FitResult,
+               cands: tuple[Candidate, ...], max_nfev: int, heldout_nfev: int,
+               stage: str) -> FitResult | Trial:
+    """Job ``i`` of a round (:func:`vfmodel.core.parallel.parallel_map`): 0 is the base
+    network's fit on the even points (the held-out reference every candidate is compared
+    with), ``i >= 1`` candidate ``i - 1`` (its held-out chi-square alone)."""
+    if i == 0:
+        return refit(family, base.applied, base.params, rows=_rows(family, 0),
+                     max_nfev=heldout_nfev)
+    prog(stage, i - 1, len(cands))
+    return _try(family, base, cands[i - 1], max_nfev, None, heldout_nfev)
 
 
 def _reason(t: Trial, bic_min: float, mismatch_left: bool) -> str:
@@ -250,15 +264,18 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             if pol.chi2 < cur.chi2:
                 cur = start = pol
         h_nfev = max_nfev if heldout_nfev is None else heldout_nfev
-        base_even = refit(family, cur.applied, cur.params, rows=_rows(family, 0),
-                          max_nfev=h_nfev)
         stage = f"candidates, round {len(rounds) + 1}"
-        # the candidates of a round are independent refits: side by side where possible
-        job = partial(_trial, family=family, base=cur, cands=tuple(remaining),
-                      max_nfev=max_nfev, base_even=base_even, heldout_nfev=h_nfev,
-                      stage=stage)
-        trials = parallel_map(job, len(remaining), progress, [stage], len(remaining))
+        # the candidates of a round and the base's even-point fit they are compared with on
+        # the held-out points are independent refits: side by side where possible
+        job = partial(_round_job, family=family, base=cur, cands=tuple(remaining),
+                      max_nfev=max_nfev, heldout_nfev=h_nfev, stage=stage)
+        out = parallel_map(job, len(remaining) + 1, progress, [stage], len(remaining))
         progress(stage, len(remaining), len(remaining))
+        base_even = out[0]
+        assert isinstance(base_even, FitResult)
+        base_ho = _odd_chi2(family, base_even)
+        trials = [replace(t, heldout_delta_chi2=t.heldout_delta_chi2 - base_ho)
+                  for t in out[1:] if isinstance(t, Trial)]
         rounds.append(tuple(trials))
         for t in trials:
             last[t.candidate.key] = t

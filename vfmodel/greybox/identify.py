@@ -411,10 +411,12 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
 
         # the first two candidates are always fitted, the third often: all three side by
         # side (with two processes the third runs while the second does; a third not
-        # needed costs CPU, not time), further ones one at a time
+        # needed costs CPU, not time), the one with most sections (the longest fit) handed
+        # out first; further ones one at a time
         n_first = min(3, len(cands))
         first = parallel_map(fit_sections, n_first, progress,
-                             [f"impedance, {n} sections" for n in cands[:n_first]], max_nfev)
+                             [f"impedance, {n} sections" for n in cands[:n_first]], max_nfev,
+                             first=[int(np.argmax(cands[:n_first]))])
         for k in range(len(cands)):
             sp, pn, rep = first[k] if k < n_first else fit_sections(k, progress)
             stages.append(rep)

@@ -5,11 +5,14 @@ Every function writes one PNG (atomically) and returns its file name.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from vfmodel.core.parallel import parallel_map
 from vfmodel.pipeline.reproduce import ReproduceResult, SpeedResult, rpm_key
 from vfmodel.report._mpl import pyplot, save
 from vfmodel.signals.filters import F_CUT_HZ
@@ -195,21 +198,24 @@ def _blackbox(res: ReproduceResult, out: Path) -> list[str]:
 
 
 def write_figures(res: ReproduceResult, out: Path) -> list[str]:
-    """All figures into ``out``; returns their file names in report order."""
-    names: list[str] = []
-    for g in ("CM", "DM"):
-        n = _impedance(res, out, g)
-        if n:
-            names.append(n)
+    """All figures into ``out``; returns their file names in report order. The figures
+    are independent and drawn side by side in processes where
+    :func:`vfmodel.core.parallel.parallel_map` can (each writes its own files)."""
     rot = [s for s in res.speeds if s.speed_rpm > 0]
+    jobs: list[partial[list[str]]] = [partial(_names, _impedance, res, out, g)
+                                      for g in ("CM", "DM")]
     if res.speeds:
-        names.append(_bvr_f(rot[-1] if rot else res.speeds[-1], out))
-    for s in res.speeds:
-        names.append(_bearing(s, out, baseline=False))
-    n = _lubricant(res, out)
-    if n:
-        names.append(n)
-    for s in res.speeds[:2] if len(res.speeds) > 1 else res.speeds:
-        names.append(_bearing(s, out, baseline=True))
-    names += _blackbox(res, out)
-    return names
+        jobs.append(partial(_names, _bvr_f, rot[-1] if rot else res.speeds[-1], out))
+    jobs += [partial(_names, _bearing, s, out, False) for s in res.speeds]
+    jobs.append(partial(_names, _lubricant, res, out))
+    jobs += [partial(_names, _bearing, s, out, True)
+             for s in (res.speeds[:2] if len(res.speeds) > 1 else res.speeds)]
+    jobs.append(partial(_names, _blackbox, res, out))
+    drawn = parallel_map(lambda k, _prog: jobs[k](), len(jobs))
+    return [name for names in drawn for name in names]
+
+
+def _names(fig: Callable[..., str | list[str] | None], *args: Any) -> list[str]:
+    """The file names one figure function wrote (it returns one, a list or None)."""
+    got = fig(*args)
+    return [] if got is None else [got] if isinstance(got, str) else list(got)
