@@ -28,8 +28,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from vfmodel.core.frequency_data import FrequencyData
-from vfmodel.core.rational_model import RationalModel
 from vfmodel.fitting import _vf_core as core
 
 _NOISE_REF = 1e-4  # noise level at which the anchors and the ridge have their full weight
@@ -83,15 +81,3 @@ def bounded(
         if _out_of_band_gain(trial, c_trial, n_ports) <= limit:
             return trial, c_trial
     return prob, coef
-
-
-def gross_gain(model: RationalModel, data: FrequencyData) -> bool:
-    """True when an S model's largest singular value at 0 Hz, 100 x the highest data
-    frequency or at infinity exceeds twice the data's largest (at least 1)."""
-    if data.kind != "S" or data.n_out != data.n_in or model.n_poles == 0:
-        return False
-    top = max(1.0, float(np.max(np.linalg.svd(data.values, compute_uv=False))))
-    h = model(np.array([0.0, 100.0 * float(data.freq_hz[-1])]))
-    gain = max(float(np.max(np.linalg.svd(h, compute_uv=False))),
-               float(np.linalg.svd(model.dd, compute_uv=False)[0]))
-    return gain > _EXCURSION * top

@@ -197,9 +197,6 @@ def vector_fit(
         e1, e0 = with_delay[1].weighted_rel_rms_error, without[1].weighted_rel_rms_error
         floor = max(e0, without[1].noise_floor or 0.0, _DELAY_EXACT)
         pick = with_delay if e1 <= _DELAY_PAYS * floor else without
-        if pick is with_delay and _out_of_band.gross_gain(with_delay[0], fd) \
-                and not _out_of_band.gross_gain(without[0], fd):
-            pick = without  # the delay does not pay when it leaves the data's size
         for note in pick[1].notes:
             warnings.warn(note, FitWarning, stacklevel=2)
         return pick
