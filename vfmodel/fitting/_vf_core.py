@@ -42,9 +42,6 @@ _GRAM_ERROR = 1e-4  # weighted error above which the Gram sigma rows are accurat
 _RANK_TOL = 1e-13  # |R_jj| / max |R_ii| below which a scaled matrix is rank deficient
 
 
-Anchors = tuple[ComplexArray, ComplexArray, float]  # (s_v, h_v, weight), see Problem
-
-
 @dataclass(frozen=True)
 class Problem:
     """A weighted fitting problem in scaled frequency.

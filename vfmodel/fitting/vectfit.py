@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -14,7 +13,7 @@ from vfmodel._choices import DcMode, Kind, PoleSpacing, Weighting, check_choice
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError
-from vfmodel.fitting import _order, _out_of_band, _relocate, _vf_core
+from vfmodel.fitting import _order, _relocate, _vf_core
 from vfmodel.fitting._fit_report import (
     FitReport,
     FitStep,
@@ -26,7 +25,6 @@ from vfmodel.fitting._fit_report import (
     point_errors,
 )
 from vfmodel.fitting._fit_setup import (
-    _ANCHOR_WEIGHT,
     _DELAY_EXACT,
     _DELAY_PAYS,
     _RIDGE,
@@ -219,13 +217,10 @@ def vector_fit(
         fit_e=bool(fit_e),
         dc_index=0 if has_dc and dc == "enforce" else None,
         pole_bounds=_pole_bounds(fd, omega_scale),
+        ridge=_RIDGE if fd.kind == "S" else 0.0,
+        anchors=(_anchors(fd, h, w, omega_scale, out_of_band_weight)
+                 if fd.kind == "S" else None),
     )
-    oob_auto = fd.kind == "S" and out_of_band_weight is None
-    if fd.kind == "S":  # out-of-band control, as strong as the noise allows
-        scale = _out_of_band.strength(_order.estimate_noise(prob)) if oob_auto else 1.0
-        rel_w = _ANCHOR_WEIGHT * scale if oob_auto else out_of_band_weight
-        prob = replace(prob, ridge=_RIDGE * scale,
-                       anchors=_anchors(fd, h, w, omega_scale, rel_w))
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
     if order == "auto":
@@ -281,9 +276,6 @@ def vector_fit(
         )
         coef, history, n_it, converged = res.coef, res.history, res.n_iterations, res.converged
         reason, noise = f"order {n} given", None
-    if oob_auto:
-        prob, coef = _out_of_band.bounded(
-            prob, coef, lambda rel: _anchors(fd, h, w, omega_scale, rel), fd.n_out)
     model = _to_model(coef, fd, omega_scale, fit_d=bool(fit_d), fit_e=bool(fit_e))
     if tau > 0:
         fd, model = data_fd, RationalModel(model.poles, model.residues, model.d, model.e,
