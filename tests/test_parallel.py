@@ -68,3 +68,11 @@ def test_first_must_name_jobs() -> None:
 
     with pytest.raises(ValueError, match="first"):
         parallel_map(lambda k, _p: k, 3, first=[3])
+
+
+def test_parallel_calls_returns_results_in_order() -> None:
+    from functools import partial
+
+    from vfmodel.core.parallel import parallel_calls
+
+    assert parallel_calls([partial(pow, 2, k) for k in range(5)]) == [1, 2, 4, 8, 16]

@@ -23,7 +23,7 @@ from typing import Any, TypeVar
 
 from vfmodel.core.progress import Progress, no_progress
 
-__all__ = ["parallel_map", "workers"]
+__all__ = ["parallel_calls", "parallel_map", "workers"]
 
 T = TypeVar("T")
 
@@ -76,3 +76,9 @@ def parallel_map(fn: Callable[[int, Progress], T], n: int, progress: Progress = 
     for lab in labels:
         progress(lab, total, total)
     return out
+
+
+def parallel_calls(jobs: Sequence[Callable[[], T]]) -> list[T]:
+    """``[job() for job in jobs]`` side by side where :func:`parallel_map` can (e.g. the
+    figures of a report, each writing its own files)."""
+    return parallel_map(lambda k, _prog: jobs[k](), len(jobs))

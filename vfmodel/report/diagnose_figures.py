@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel.core.parallel import parallel_map
+from vfmodel.core.parallel import parallel_calls
 from vfmodel.detective.diagnose import Diagnosis, residual_by_channel
 from vfmodel.detective.problem import Channel, Family
 from vfmodel.greybox.objective import PreparedRecording
@@ -31,7 +31,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
     """Write the PNG figures to ``out``; returns their file names. The model predictions
     are computed here; the figures (two per channel, the pole map, one waveform per
     recording) are independent and drawn side by side in processes where
-    :func:`vfmodel.core.parallel.parallel_map` can."""
+    :func:`vfmodel.core.parallel.parallel_calls` can."""
     r0 = residual_by_channel(family, d.start)
     r1 = residual_by_channel(family, d.final)
     p0 = family.predict(d.start.applied, d.start.params)
@@ -41,7 +41,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
         for k in range(len(family.channels))]
     jobs.append(partial(_pole_map, family, d, out))
     jobs += _waveform_jobs(family, d, out)
-    drawn = parallel_map(lambda k, _prog: jobs[k](), len(jobs))
+    drawn = parallel_calls(jobs)
     return [name for names in drawn for name in names]
 
 
