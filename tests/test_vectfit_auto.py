@@ -65,3 +65,31 @@ def test_motor_like_impedance_auto_in_z() -> None:
     assert mape < 0.5, (mape, report.order_reason)
     assert model.kind == "Z" and model.is_stable
     assert report.order <= 24
+
+
+def test_order_growth_ends_when_pruning_takes_back_new_poles() -> None:
+    """data/regression/independent102_V-W.csv: the automatic order never returned (each
+    step's new poles were pruned again and the plateau test never fired)."""
+    import signal
+    from pathlib import Path
+
+    from vfmodel.core.io_spectrum import read_spectrum
+
+    path = Path(__file__).resolve().parents[1] / "data/regression/independent102_V-W.csv"
+    data = read_spectrum(path)
+
+    def stuck(*_: object) -> None:
+        raise TimeoutError("the automatic order did not return within 60 s (0.1 s expected)")
+
+    old = signal.signal(signal.SIGALRM, stuck)
+    signal.alarm(60)
+    try:
+        _, report = vector_fit(data, "auto")
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    # reference: the generator's noise, 0.622 % of |Z| per point (truth.json z_noise);
+    # a fit at the noise floor has about that per-point RMS error, and not 1.25x more
+    assert report.point_rel_rms_error is not None
+    assert report.point_rel_rms_error < 1.25 * 0.00622, report.order_reason
+    assert report.order <= 20, report.order_reason

@@ -215,7 +215,7 @@ def auto_order(
     n_it = 0
     best_err = err_last = np.inf
     why = ""
-    stall = n_gain = 0
+    stall = n_gain = added = 0
     while True:
         res = _relocate.iterate(
             prob,
@@ -238,7 +238,9 @@ def auto_order(
             why = "noise"
             break
         # plateau: poles added since the last 10 % gain amount to a quarter of the order
-        stall = n - n_gain if err > (1.0 - _MIN_GAIN) * best_err else 0
+        # (counted as added, not as n - n_gain: pruning can take back what a step added,
+        # and the order then never grows; independent bench 102's U-Frame looped forever)
+        stall = stall + added if err > (1.0 - _MIN_GAIN) * best_err else 0
         if err <= (1.0 - _MIN_GAIN) * best_err:
             n_gain = n
         if stall >= max(4, n_gain // 4) and n >= min_order:
@@ -253,6 +255,7 @@ def auto_order(
             new = np.array([-w_hi], dtype=complex)
         else:
             new = _new_poles(prob, coef, n_pairs, w_lo)
+        added = core.n_poles(new)
         reps = core.sort_reps(np.concatenate([coef.reps, new]))
     best_err = min(t[1] for t in tried)
     # at the noise floor the last model is the pick; at a plateau the best error is the floor
