@@ -274,7 +274,8 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
         return jcache[key]
 
     progress(stage, 0, max_nfev)
-    res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-7, ftol=1e-6)
+    res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-7, ftol=1e-6,
+                  compress=None)
     progress(stage, max_nfev, max_nfev)
     r, jm = fun(res.x), jac(res.x)
     dof = max(r.size - len(names), 1)
