@@ -40,7 +40,7 @@ from vfmodel.circuit.netlist import Circuit, Element
 from vfmodel.core.atomic import atomic_directory
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_spectrum import csv_text
-from vfmodel.greybox.metrics import spectral_corr
+from vfmodel.greybox.metrics import spectral_corr, spectral_corr_periodogram
 from vfmodel.signals.filters import brickwall_filter
 
 ArrF = NDArray[np.float64]
@@ -445,6 +445,8 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                 # what a perfect model can reach against this noisy record
                 "spectral_corr_ceiling": spectral_corr(y[3], noisy[3].astype(np.float32),
                                                        d.fs_hz),
+                "spectral_corr_periodogram_ceiling": spectral_corr_periodogram(
+                    y[3], noisy[3].astype(np.float32), d.fs_hz),
                 "equivalents": equivalents(d, s)}
         (tmp / "dataset.toml").write_text("\n".join(toml) + "\n")
         summary: dict[str, object] = {

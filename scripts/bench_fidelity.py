@@ -66,6 +66,8 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record") -> dict[str,
         if tj.is_file():
             recs = json.loads(tj.read_text()).get("recordings", {})
             out["corr_ceiling"] = {k: v.get("spectral_corr_ceiling") for k, v in recs.items()}
+            out["pcorr_ceiling"] = {k: v.get("spectral_corr_periodogram_ceiling")
+                                    for k, v in recs.items()}
     return out
 
 
@@ -73,7 +75,8 @@ def _table(runs: list[dict[str, Any]]) -> list[str]:
     def pct(x: float | None, w: int) -> str:
         return f"{'null':>{w}}" if x is None else f"{x:{w}.2f}%"
 
-    lines = [f"{'bench':<14}{'rpm':>5} {'peak err':>10} {'corr':>7} {'(ceil)':>7} {'plateau':>8} "
+    lines = [f"{'bench':<14}{'rpm':>5} {'peak err':>10} {'corr':>7} {'(ceil)':>7} "
+             f"{'pgram':>7} {'(ceil)':>7} {'plateau':>8} "
              f"{'BVR peak':>9} {'BVR plat':>9} {'beats':>6} {'C_b 95% covers':>15}"]
     for r in runs:
         res = r["results"]
@@ -90,6 +93,10 @@ def _table(runs: list[dict[str, Any]]) -> list[str]:
                    else pct(v["rel_err_pct"], 8))
             ceil = r.get("corr_ceiling", {}).get(k)
             ceil_s = f"{ceil:7.4f}" if ceil is not None else f"{'-':>7}"
+            pceil = r.get("pcorr_ceiling", {}).get(k)
+            pg = v.get("spectral_corr_periodogram")
+            ceil_s += (f" {pg:7.4f}" if pg is not None else f" {'-':>7}") + (
+                f" {pceil:7.4f}" if pceil is not None else f" {'-':>7}")
             beats = res["greybox_beats_baseline"][k]
             cov = r["covers"].get(f"c_b@{k}", "-")
             lines.append(f"{'':<14}{k:>5} {err:>10} {v['spectral_corr']:7.4f} {ceil_s} "
@@ -104,6 +111,7 @@ def _summary(runs: list[dict[str, Any]]) -> list[str]:
     abs0: list[float] = []
     corr, mape, coh, beats, cov = [], [], [], [], []
     corr_ceil: list[tuple[float, float]] = []
+    pcorr: list[float] = []
     for r in runs:
         res = r["results"]
         mape.append(res["impedance"]["mean_mape_pct"])
@@ -112,6 +120,8 @@ def _summary(runs: list[dict[str, Any]]) -> list[str]:
             if not isinstance(v, dict):
                 continue
             corr.append(v["spectral_corr"])
+            if v.get("spectral_corr_periodogram") is not None:
+                pcorr.append(v["spectral_corr_periodogram"])
             val = v["abs_err_v"] if v["state"] == "standstill" else v["rel_err_pct"]
             # an undefined error (null) counts as the worst
             (abs0 if v["state"] == "standstill" else rot).append(
@@ -141,6 +151,8 @@ def _summary(runs: list[dict[str, Any]]) -> list[str]:
         worst = min(corr_ceil, key=lambda t: t[0] - t[1])
         out.append(f"  {'(worst shortfall below the noise ceiling)':<48} "
                    f"{worst[0]:.4f} vs {worst[1]:.4f}")
+    if pcorr:
+        out.append(f"  {'(periodogram |FFT| correlation, worst speed)':<48} {min(pcorr):.4f}")
     line("grey box beats BVR at every speed", f"{sum(beats)}/{len(beats)}", all(beats))
     line("impedance MAPE, worst bench (<= 3 %)", f"{max(mape):.2f} %", max(mape) <= GOALS["mape"])
     line("impedance coherence, worst bench (>= 0.995)", f"{min(coh):.5f}",

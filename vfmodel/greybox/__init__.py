@@ -103,6 +103,7 @@ if TYPE_CHECKING:
         peak_errors,
         peak_v,
         spectral_corr,
+        spectral_corr_periodogram,
     )
     from vfmodel.greybox.network import (
         NetSpec,
@@ -214,6 +215,7 @@ _EXPORTS: dict[str, str] = {
     "peak_errors": "metrics",
     "peak_v": "metrics",
     "spectral_corr": "metrics",
+    "spectral_corr_periodogram": "metrics",
     "BANDS_HZ": "blackbox",
     "BlackBoxComparison": "blackbox",
     "compare_blackbox": "blackbox",
@@ -299,6 +301,7 @@ __all__ = [
     "pwm_edges",
     "record_term",
     "spectral_corr",
+    "spectral_corr_periodogram",
     "steady_output",
     "steady_state",
     "thin_spectra",

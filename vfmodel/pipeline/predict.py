@@ -23,7 +23,12 @@ from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import BEARING_NODE, PHASES, SOURCES, with_terminal_sources
 from vfmodel.greybox.drive import CableSpec, InverterSpec, ScopeSpec, steady_state
-from vfmodel.greybox.metrics import peak_errors, peak_v, spectral_corr
+from vfmodel.greybox.metrics import (
+    peak_errors,
+    peak_v,
+    spectral_corr,
+    spectral_corr_periodogram,
+)
 from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
 from vfmodel.signals.periodic import periodic_response
 
@@ -62,7 +67,8 @@ def _summary(fs: float, u_b: ArrF, meas: ArrF | None) -> dict[str, object]:
         pm = peak_v(meas, fs, filtered=True)
         a, r = peak_errors(float(out["peak_model_v"]), pm)  # type: ignore[arg-type]
         out.update({"peak_measured_v": pm, "abs_err_v": a, "rel_err_pct": r,
-                    "spectral_corr": spectral_corr(u_b, meas, fs)})
+                    "spectral_corr": spectral_corr(u_b, meas, fs),
+                    "spectral_corr_periodogram": spectral_corr_periodogram(u_b, meas, fs)})
     return out
 
 

@@ -52,6 +52,7 @@ from vfmodel.greybox.metrics import (
     peak_v,
     plateau_rel_err_pct,
     spectral_corr,
+    spectral_corr_periodogram,
 )
 from vfmodel.greybox.params import ParamSet
 
@@ -193,7 +194,10 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         key = rpm_key(sf.speed_rpm)
         entry: dict[str, Any] = {
             "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
-            "rel_err_pct": _f(rel_err), "spectral_corr": corr, "lubricant": lub,
+            "rel_err_pct": _f(rel_err), "spectral_corr": corr,
+            "spectral_corr_periodogram": spectral_corr_periodogram(u_model, prep.bearing,
+                                                                   prep.fs),
+            "lubricant": lub,
             "state": sf.state, "residual_rms_v": float(np.std(prep.bearing - u_model)),
             "plateau_rel_err_pct": _f(plateau_rel_err_pct(u_model, prep.bearing, prep.fs)),
             # the network's periodic response alone (what `predict` computes from the

@@ -49,7 +49,7 @@ from vfmodel.signals.checks import (
     warn_clipping,
 )
 
-__all__ = ["H1Result", "h1_analysis", "h1_analysis_blocks", "h1_estimate"]
+__all__ = ["H1Result", "default_nperseg", "h1_analysis", "h1_analysis_blocks", "h1_estimate"]
 
 Detrend = Literal["constant", "linear", "none"]
 _SEG_BATCH = 64  # segments transformed at once (bounds the memory of one batch)
@@ -102,7 +102,9 @@ class H1Result:
         return np.degrees(self.mag_rel_std)
 
 
-def _default_nperseg(n: int) -> int:
+def default_nperseg(n: int) -> int:
+    """Welch segment length of the H1 estimator (and of the spectral correlation) for a
+    record of ``n`` samples."""
     # largest power of two giving >= ~15 half-overlapping segments, within [256, 65536]
     p = 2 ** int(np.floor(np.log2(max(n / 8, 1))))
     return int(min(max(p, 256), 65536, n))
@@ -114,7 +116,7 @@ def _check_welch(
     if nperseg is None:
         if n is None:
             raise InputError("nperseg is required for streamed records", place="nperseg")
-        nperseg = _default_nperseg(n)
+        nperseg = default_nperseg(n)
     if int(nperseg) != nperseg or nperseg < 2:
         raise InputError("nperseg must be an integer >= 2", place="nperseg", found=repr(nperseg))
     nperseg = int(nperseg)
