@@ -55,6 +55,7 @@ from vfmodel.greybox.metrics import (
     spectral_corr_periodogram,
 )
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.propagate import with_machine_uncertainty
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
 
@@ -205,8 +206,10 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             "peak_model_periodic_v": peak_v(u_periodic, prep.fs, filtered=True),
         }
         if sf.report is not None:
-            rep = sf.report
-            # 95 % intervals (delta method on the stage's posterior covariance of log p)
+            # 95 % intervals (delta method on the stage's posterior covariance of log p),
+            # with the uncertainty of the machine the lubricant was fitted on
+            rep = sf.report if not mach else with_machine_uncertainty(
+                sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1])
             entry["lubricant_interval"] = {
                 "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
                 "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
