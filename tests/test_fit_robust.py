@@ -218,6 +218,27 @@ def test_delay_extraction_cuts_the_order() -> None:
     assert check.passive and model.delay == pytest.approx(tau, rel=0.05)
 
 
+def test_delay_that_does_not_cut_the_order_is_not_kept() -> None:
+    # a 4-port resonant network (scripts/bench_pdn.py's generator, 40 poles, no delay)
+    # whose phase turns 5 times: its 7 ps "group delay" fits 43 poles against 39 without
+    # and leaves sigma(D) ~ 24 out of band; delay="auto" must return the plain fit
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_pdn", Path(__file__).resolve().parents[1] / "scripts" / "bench_pdn.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    f, sp = mod.pdn_s(4, 40, 600, 0)
+    data = FrequencyData(f, sp, kind="S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)
+        model, _ = vector_fit(data, delay="auto")
+        plain, _ = vector_fit(data, delay="none")
+    assert model.delay == 0.0 and model.n_poles == plain.n_poles
+    assert float(np.linalg.svd(model.dd, compute_uv=False)[0]) < 2.0
+
+
 @pytest.mark.ngspice
 def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
     from vfmodel.circuit.ngspice import run_ac
