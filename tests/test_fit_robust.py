@@ -18,6 +18,7 @@ import skrf
 from vfmodel.cli.main import main as cli_main
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_spectrum import read_spectrum
+from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError
 from vfmodel.fitting.artifacts import find_artifacts
 from vfmodel.fitting.data_passivity import data_passivity
@@ -47,13 +48,36 @@ def test_constant_file_gives_pole_free_model(name: str, tmp_path: Path) -> None:
     assert res.model.n_poles == 0
     assert res.unconstrained_rel_rms_error < 1e-9
     assert res.passivity is not None and res.passivity.passive
-    # tee.s3p is lossless to 6 digits (sigma = 1 + 1e-12): enforcement moves D by < 1e-4
-    assert res.rel_rms_error < 1e-4
+    # tee.s3p is lossless to 6 digits (sigma = 1 + 6e-13): the nearest passive constant
+    # is as close to the data as the data's own violation floor allows (1.2x, issue 13)
+    floor = res.data_passivity.floor if res.data_passivity is not None else 0.0
+    assert res.rel_rms_error <= 1.2 * max(res.unconstrained_rel_rms_error, floor) + 1e-15
     obj = model_to_json(res.model, res.fit, (1.0, 2.0), True)
     (tmp_path / "m.json").write_text(json.dumps(obj, allow_nan=False))
     back = read_model_json(tmp_path / "m.json")
     assert back.n_poles == 0
     np.testing.assert_allclose(back(data.freq_hz), res.model(data.freq_hz), atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["S", "Z"])
+def test_pole_free_model_enforced_by_the_nearest_passive_constant(kind: str) -> None:
+    # analytic reference: a rotated diag(1 + 1e-9, 0.5) (S) or diag(-1e-9, 2) plus a
+    # lossless antisymmetric part (Z) is made passive by moving the one offending singular
+    # value (eigenvalue) by 1e-9: the change is 1e-9 in the 2-norm, not the margin (1e-6)
+    rot = np.array([[0.8, -0.6], [0.6, 0.8]])
+    if kind == "S":
+        d = rot @ np.diag([1 + 1e-9, 0.5]) @ rot.T
+    else:
+        d = rot @ np.diag([-1e-9, 2.0]) @ rot.T + np.array([[0.0, 0.3], [-0.3, 0.0]])
+    model = RationalModel(np.zeros(0, complex), np.zeros((0, 2, 2), complex), d, kind=kind)
+    fixed, check = enforce_passivity(model)
+    assert check.passive and fixed.n_poles == 0
+    assert np.linalg.norm(fixed.dd - d, 2) == pytest.approx(1e-9, rel=1e-3)
+    if kind == "S":
+        assert np.linalg.norm(fixed.dd, 2) <= 1.0
+    else:
+        np.testing.assert_allclose(fixed.dd - fixed.dd.T, d - d.T, atol=1e-15)
+        assert np.linalg.eigvalsh(0.5 * (fixed.dd + fixed.dd.T))[0] >= 0.0
 
 
 @pytest.mark.ngspice
@@ -218,6 +242,27 @@ def test_delay_extraction_cuts_the_order() -> None:
     assert check.passive and model.delay == pytest.approx(tau, rel=0.05)
 
 
+def test_delay_that_does_not_cut_the_order_is_not_kept() -> None:
+    # a 4-port resonant network (scripts/bench_pdn.py's generator, 40 poles, no delay)
+    # whose phase turns 5 times: its 7 ps "group delay" fits 43 poles against 39 without
+    # and leaves sigma(D) ~ 24 out of band; delay="auto" must return the plain fit
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_pdn", Path(__file__).resolve().parents[1] / "scripts" / "bench_pdn.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    f, sp = mod.pdn_s(4, 40, 600, 0)
+    data = FrequencyData(f, sp, kind="S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)
+        model, _ = vector_fit(data, delay="auto")
+        plain, _ = vector_fit(data, delay="none")
+    assert model.delay == 0.0 and model.n_poles == plain.n_poles
+    assert float(np.linalg.svd(model.dd, compute_uv=False)[0]) < 2.0
+
+
 @pytest.mark.ngspice
 def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
     from vfmodel.circuit.ngspice import run_ac
@@ -243,3 +288,43 @@ def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
     ref = model(res.freq_hz)
     np.testing.assert_allclose(res.values[:, 1], ref[:, 1, 0], atol=1e-4)
     np.testing.assert_allclose(res.values[:, 0] - 1, ref[:, 0, 0], atol=1e-4)
+
+
+# ---------------------------------------------------------------------- noise-free data
+@pytest.mark.parametrize("name", ["ntwk1.s2p", "open.s2p", "short.s2p"])
+def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
+    # simulated (noise-free) files: the out-of-band anchors and the ridge that hold the
+    # poles in place cap the accuracy near 1e-7; the last relocation with lighter ones
+    # must reach scikit-rf's auto_fit on the same file (same error measure, 1.1x or 1e-9)
+    net = skrf.Network(str(SKRF_DATA / name))
+    data = read_spectrum(SKRF_DATA / name).to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, rep = vector_fit(data, delay="auto")
+        vf = skrf.vectorFitting.VectorFitting(net)
+        vf.auto_fit()
+    n = data.n_out
+    ref = np.stack([[vf.get_model_response(i, j, data.freq_hz) for j in range(n)]
+                    for i in range(n)]).transpose(2, 0, 1)
+    err_skrf = float(np.linalg.norm(ref - data.values) / np.linalg.norm(data.values))
+    assert rep.rel_rms_error <= max(1.1 * err_skrf, 1e-9)
+    anchored, _ = vector_fit(data, delay="auto", out_of_band_weight=1e-4)
+    assert model.n_poles == anchored.n_poles
+
+
+def test_lighter_fit_not_taken_when_it_leaves_the_data_size() -> None:
+    # coaxial.s2p: relocated with lighter anchors the model reaches a gain of ~2.5 out of
+    # band (data <= 0.9986); the model returned keeps the anchored fit's gain at 0 Hz,
+    # 100 f_max and of D (reference: the fit with the anchors' weight given explicitly)
+    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, _ = vector_fit(data, delay="auto")
+        anchored, _ = vector_fit(data, delay="auto", out_of_band_weight=1e-4)
+
+    def gain(m: RationalModel) -> float:
+        h = m(np.array([0.0, 100.0 * data.freq_hz[-1]]))
+        return max(float(np.max(np.linalg.svd(h, compute_uv=False))),
+                   float(np.linalg.svd(m.dd, compute_uv=False)[0]))
+
+    assert gain(model) <= max(gain(anchored), 1.0) + 1e-3

@@ -396,6 +396,10 @@ def enforce(
         first = check_passivity(model, method="hamiltonian")
     if first.passive:
         return model, first
+    if model.n_poles == 0 and perturb_d:
+        projected = _constant_projection(model)
+        if projected is not None:
+            return projected
     if not perturb_d and first.d_margin < 0:
         raise PassivityError(
             "D violates the asymptotic passivity condition and perturb_d is False"
@@ -492,6 +496,37 @@ def enforce(
         f"{report.worst_violation:.3g} in bands {report.bands_hz[:3]} Hz; "
         "raise max_iter or the margin"
     )
+
+
+_ROUNDING = 8 * np.finfo(float).eps  # relative margin of a projected constant
+
+
+def _constant_projection(model: RationalModel) -> tuple[RationalModel, PassivityReport] | None:
+    """A pole-free model (D alone) made passive by the nearest passive constant in the
+    Frobenius norm: singular values of D clipped to 1 (S), eigenvalues of its symmetric
+    part clipped to 0 (Z, Y; the antisymmetric part is lossless and kept), each a few
+    rounding units inside the bound so that the certificate holds. No program and no
+    margin are needed: passivity of a constant is the condition on D alone, and the
+    projection is the smallest change (a tee lossless to 1e-12 moves by 1e-12, not by the
+    margin). None when the certificate fails all the same."""
+    d = model.dd
+    if model.kind == "S":
+        u, sv, vh = np.linalg.svd(d)
+        d_new = (u * np.minimum(sv, 1.0 - _ROUNDING)) @ vh
+    else:
+        sym = 0.5 * (d + d.T)
+        lam, vec = np.linalg.eigh(sym)
+        top = max(float(np.max(np.abs(lam))), 1e-300)
+        d_new = (d - sym) + (vec * np.maximum(lam, _ROUNDING * top)) @ vec.T
+    fixed = RationalModel(model.poles, model.residues, d_new, model.ee, model.kind, model.z0)
+    report = check_passivity(fixed, method="hamiltonian")
+    if not report.passive:
+        return None
+    change = float(np.linalg.norm(d_new - d))
+    rel = change / max(float(np.linalg.norm(d)), 1e-300)
+    return fixed, PassivityReport(**{**report.__dict__, "iterations": 0,
+                                     "rms_change": change / np.sqrt(d.size),
+                                     "rel_rms_change": rel})
 
 
 def _solve(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
