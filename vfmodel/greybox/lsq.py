@@ -47,9 +47,11 @@ def log_start(params: ParamSet, names: Sequence[str]) -> tuple[ArrF, ArrF, ArrF]
     return np.clip(params.to_log(names), lo, hi), lo, hi
 
 
-COMPRESS_MIN_ROWS = 2000
-"""Residual vectors at least this long (and 10x the parameter count) are compressed
-(:class:`_Compressed`) before they reach the solver."""
+COMPRESS_MIN_WORK = 5e7
+"""``compress=None`` compresses (:class:`_Compressed`) when ``m n^2`` of the ``m x n``
+Jacobian reaches this (the solver's SVD then costs ~25 ms or more per step) and
+``m >= 10 n``. Below it the SVD is cheap and the compressed steps, equal only to
+rounding, would merely perturb the path of fits that end at their evaluation limit."""
 
 
 def _last_value(g: Callable[[ArrF], ArrF]) -> Callable[[ArrF], ArrF]:
@@ -81,14 +83,14 @@ class _Compressed:
     ``Jc^T fc = J^T f`` exactly (``f`` has no part along ``P``'s coordinates), so every
     step is the step of the full problem. Cost per Jacobian: three ``m x n x n`` products
     instead of the solver's SVD of the ``m x n`` matrix (independent bench 104's joint
-    stage: ~110,000 rows, 36 columns, 0.2 s per SVD). Residuals shorter than ``min_rows``
-    (or 10 per parameter) are passed through unchanged.
+    stage: ~110,000 rows, 36 columns, 0.2 s per SVD). Problems with ``m n^2`` below
+    ``min_work`` (or fewer than 10 rows per parameter) are passed through unchanged.
     """
 
     def __init__(self, fun: Callable[[ArrF], ArrF], jac: Callable[[ArrF], ArrF],
-                 min_rows: int) -> None:
+                 min_work: float) -> None:
         self._fun, self._jac = fun, jac
-        self._min_rows = min_rows
+        self._min_work = min_work
         self._t: ArrF | None = None
         self._on: bool | None = None
         self._last: tuple[bytes, ArrF] | None = None
@@ -96,7 +98,7 @@ class _Compressed:
     def fun(self, x: ArrF) -> ArrF:
         f = self._fun(x)
         if self._on is None:  # the solver's starting point: decide, and take the basis
-            self._on = f.size >= max(self._min_rows, 10 * x.size)
+            self._on = f.size >= 10 * x.size and f.size * x.size**2 >= self._min_work
             if self._on:
                 self._t = np.linalg.qr(self._jac(x))[0]
         if not self._on:
@@ -133,15 +135,15 @@ def fit_log(fun: Callable[[ArrF], ArrF], jac: Callable[[ArrF], ArrF], x0: ArrF, 
 
     ``jac(x)`` is ``d fun / dx``; ``x_scale`` ``None`` (SciPy's default) or ``"jac"``.
     ``compress=True`` hands the solver the equivalent short system of
-    :class:`_Compressed`; ``None``: when the residual has at least
-    :data:`COMPRESS_MIN_ROWS` rows and 10 per parameter. The identification stages use
-    ``None`` (the joint stage's ~110,000 waveform residuals: 31.7 -> 12.8 s on independent
-    bench 104, loaded machine); the detective's refits do not (their residuals are shorter
-    and the SVD is not their cost: 62.6 vs 65.9 s CPU on pmsm_fixture without/with)."""
+    :class:`_Compressed`; ``None``: when the solver's SVD is costly
+    (:data:`COMPRESS_MIN_WORK`). The identification stages use ``None``: only the joint
+    stage is compressed (~110,000 waveform residuals, 36 parameters: 31.7 -> 12.8 s on
+    independent bench 104, loaded machine); the detective's refits do not (the SVD is not
+    their cost: 62.6 vs 65.9 s CPU on pmsm_fixture without/with)."""
     kw: dict[str, Any] = {} if x_scale is None else {"x_scale": x_scale}
     if compress is not False:
         c = _Compressed(_last_value(fun), _last_value(jac),
-                        COMPRESS_MIN_ROWS if compress is None else 0)
+                        COMPRESS_MIN_WORK if compress is None else 0.0)
         fun, jac = c.fun, c.jac
     res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev,
                         xtol=xtol, ftol=ftol, gtol=gtol, **kw)
