@@ -39,12 +39,14 @@ def test_two_step_covariance_matches_the_linear_estimator() -> None:
     cond = sig2 * ata_inv
     params = ParamSet(tuple(ParamSpec(n, 1.0, 1e-3, 1e3, n.split(".")[0], "", "")
                             for n in LUB + MACH), (1.0,) * 5)
-    lub_rep = StageReport("lubricant 100 rpm", LUB, m, 1.0, 5, 1,
+    # as fit_stage reports it: chi2_red times (J^T J)^-1 (here chi2_red = the noise
+    # variance, the residual not whitened)
+    lub_rep = StageReport("lubricant 100 rpm", LUB, m, sig2, 5, 1,
                           {n: 0.0 for n in LUB}, cond)
     mach_rep = StageReport("standstill 0 rpm", (*MACH, "winding.U.R_w"), m, 1.0, 5, 1,
                            {}, np.pad(sig_m, ((0, 1), (0, 1))) + np.diag([0, 0, 0, 1.0]))
     out = with_machine_uncertainty(_Linear(a, b), params, lub_rep, mach_rep,
-                                   prior_sigma=0.0, machine_names=MACH)
+                                   machine_names=MACH)
     # reference: theta_l = (A^T A)^-1 A^T (y - B theta_m) with theta_m ~ (., Sigma_m)
     # independent of the record noise: Cov = sig2 (A^T A)^-1 + K Sigma_m K^T,
     # K = (A^T A)^-1 A^T B; Cov(theta_l, theta_m) = -K Sigma_m
@@ -61,3 +63,26 @@ def test_joint_report_is_left_as_it_is() -> None:
     joint = StageReport("joint 100 rpm", MACH + LUB, 10, 1.0, 5, 1, {}, np.eye(5))
     mach = StageReport("standstill 0 rpm", MACH, 10, 1.0, 5, 1, {}, np.eye(3))
     assert with_machine_uncertainty(None, params, joint, mach, machine_names=MACH) is joint
+
+
+def test_unseen_machine_direction_leaves_what_moves_with_it_unbounded() -> None:
+    rng = np.random.default_rng(9)
+    a = rng.standard_normal((50, 2))
+    b = np.zeros((50, 3))
+    b[:, 0] = a[:, 0] + 0.1 * rng.standard_normal(50)  # lubricant 0 moves with C_wr
+    params = ParamSet(tuple(ParamSpec(n, 1.0, 1e-3, 1e3, "x", "", "") for n in LUB + MACH),
+                      (1.0,) * 5)
+    lub_rep = StageReport("lubricant 100 rpm", LUB, 50, 1.0, 5, 1, {},
+                          np.linalg.inv(a.T @ a))
+    sig_m = np.diag([np.inf, 0.01, 0.01])               # C_wr not seen by the machine stage
+    out = with_machine_uncertainty(_Linear(a, b), params, lub_rep,
+                                   StageReport("standstill 0 rpm", MACH, 50, 1.0, 5, 1, {},
+                                               sig_m), machine_names=MACH)
+    assert out.cov_log is not None
+    d = np.diag(out.cov_log)
+    # reference: lubricant 0 moves with the unseen C_wr (infinite); lubricant 1 only
+    # through its correlation with lubricant 0 in (A^T A)^-1, so it is unbounded too unless
+    # that correlation is zero; the seen machine parameters keep their variances
+    k = np.linalg.inv(a.T @ a) @ a.T @ b
+    assert np.isinf(d[0]) and np.isinf(d[1]) == (abs(k[1, 0]) > 0)
+    assert np.allclose(d[3:], [0.01, 0.01])

@@ -81,18 +81,23 @@ def test_spectral_correlation_welch() -> None:
     u, v = rng.standard_normal(n), rng.standard_normal(n)
     assert abs(spectral_corr(u, u, fs) - 1.0) < 1e-12
     assert abs(spectral_corr(-3 * u, u, fs) - 1.0) < 1e-12
-    # reference: Welch's average written out (Hann, 2048-sample half-overlapping segments,
-    # the H1 estimator's segment length for 20,000 samples)
-    m = 2048
-    w = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(m) / m)  # periodic Hann (scipy's default)
+    # reference: scipy's Welch estimate (Hann, the H1 estimator's 2048-sample segments for
+    # 20,000 samples, half overlap, two-sided so that no bin is doubled)
+    from scipy.signal import welch
 
-    def amp(x: np.ndarray) -> np.ndarray:
-        segs = [x[k:k + m] for k in range(0, n - m + 1, m // 2)]
-        return np.sqrt(np.mean([np.abs(np.fft.rfft(w * s_)) ** 2 for s_ in segs], axis=0))
-
-    f = np.fft.rfftfreq(m, 1 / fs)
-    ref = np.corrcoef(amp(u)[f <= 10e6], amp(v)[f <= 10e6])[0, 1]
+    f, p = welch(np.stack([u, v]), fs, window="hann", nperseg=2048, noverlap=1024,
+                 detrend=False, return_onesided=False, axis=-1)
+    sel = (f >= 0) & (f <= 10e6)
+    ref = np.corrcoef(np.sqrt(p[0, sel]), np.sqrt(p[1, sel]))[0, 1]
     assert abs(spectral_corr(u, v, fs) - ref) < 1e-9
+
+
+def test_spectral_correlation_of_tiny_records() -> None:
+    # three samples: one segment, a number; one sample: a clear input error
+    assert np.isfinite(spectral_corr(np.array([1.0, 2.0, 0.5]), np.array([0.5, 1.0, 2.0]),
+                                     1e6))
+    with pytest.raises(InputError, match="nperseg"):
+        spectral_corr(np.array([1.0]), np.array([2.0]), 1e6)
 
 
 def test_welch_spectral_correlation_sees_the_model_through_the_noise() -> None:

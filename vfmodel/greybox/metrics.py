@@ -161,25 +161,14 @@ def spectral_corr_periodogram(u_model: ArrayLike, u_meas: ArrayLike, fs: float, 
     return _pearson(np.abs(sfft.rfft(a))[sel], np.abs(sfft.rfft(b))[sel])
 
 
-def welch_amplitude(u: NDArray[np.float64], nperseg: int) -> NDArray[np.float64]:
-    """``sqrt`` of the mean ``|rfft|^2`` of Hann-windowed half-overlapping segments
-    (Welch's average, unscaled: every bin alike)."""
-    step = nperseg // 2
-    starts = range(0, u.size - nperseg + 1, step)
-    win = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(nperseg) / nperseg)  # periodic Hann
-    acc = np.zeros(nperseg // 2 + 1)
-    for k in starts:
-        acc += np.abs(sfft.rfft(win * u[k:k + nperseg])) ** 2
-    return np.sqrt(acc / len(starts))
-
-
 def spectral_corr(u_model: ArrayLike, u_meas: ArrayLike, fs: float, *,
                   f_max_hz: float = F_CUT_HZ, nperseg: int | None = None) -> float:
     """Pearson correlation of the Welch amplitude spectra of two records over
     0..``f_max_hz`` (module docstring; ``nperseg`` default: the H1 estimator's)."""
-    from vfmodel.signals.h1 import default_nperseg
+    from vfmodel.signals.h1 import default_nperseg, welch_power
 
     a, b = _records(u_model, u_meas)
     n = default_nperseg(a.size) if nperseg is None else int(nperseg)
+    amp = np.sqrt(welch_power(np.stack([a, b]), n))
     sel = sfft.rfftfreq(n, 1.0 / fs) <= f_max_hz
-    return _pearson(welch_amplitude(a, n)[sel], welch_amplitude(b, n)[sel])
+    return _pearson(amp[0, sel], amp[1, sel])

@@ -11,8 +11,10 @@ record fixes the divider ratio ``C_wr / (C_wr + C_rf + 2 C_b)``, not the scale).
 The two-step estimator's covariance (Murphy & Topel 1985): with ``J_l``, ``J_m`` the
 record residual's derivatives by the log lubricant and log machine parameters,
 ``S = d theta_l / d theta_m = -(J_l^T J_l + I / sigma^2)^+ J_l^T J_m`` (implicit function
-theorem at the optimum; ``sigma``: the fit's weak prior), and the machine covariance
-``Sigma_m`` of the last machine stage,
+theorem at the optimum; ``sigma``: the fit's weak prior). The inverse is the stage's own
+covariance divided by its scale: :func:`.identify.fit_stage` reports
+``C_l = chi2_red * corr_factor * (J_l^T J_l + I / sigma^2)^+``. With the machine
+covariance ``Sigma_m`` of the last machine stage,
 
     Cov(theta_l, theta_m) = [[C_l + S Sigma_m S^T, S Sigma_m], [Sigma_m S^T, Sigma_m]].
 
@@ -34,7 +36,7 @@ __all__ = ["with_machine_uncertainty"]
 
 
 def with_machine_uncertainty(term: object, params: ParamSet, report: StageReport,
-                             machine: StageReport, *, prior_sigma: float = 1.0,
+                             machine: StageReport, *,
                              machine_names: Sequence[str] = SHARED) -> StageReport:
     """``report`` (a lubricant stage) extended by the ``machine_names`` of ``machine``
     (the last machine stage) with the covariance above. Returned unchanged when it
@@ -52,15 +54,19 @@ def with_machine_uncertainty(term: object, params: ParamSet, report: StageReport
     sig_m = machine.cov_log[np.ix_(sel, sel)]
     _, jac = term.residual(params, lub + mach, jac=True)  # type: ignore[attr-defined]
     jl, jm = jac[:, :len(lub)], jac[:, len(lub):]
-    a = jl.T @ jl + (np.eye(len(lub)) / prior_sigma**2 if prior_sigma > 0 else 0.0)
-    s = -np.linalg.pinv(a) @ (jl.T @ jm)
-    finite = np.all(np.isfinite(sig_m))
-    if finite:
-        c_ll = report.cov_log + s @ sig_m @ s.T
-        c_lm = s @ sig_m
-    else:  # an unseen machine direction leaves the lubricant unbounded along it
-        c_ll = np.full_like(report.cov_log, np.inf)
-        c_lm = np.full((len(lub), len(mach)), np.inf)
+    scale = max(report.chi2_red * report.corr_factor, 1e-300)
+    # unseen directions carry infinite variances (log_covariance): they stay infinite,
+    # and so does every lubricant parameter that moves with an unseen machine parameter
+    c_l = np.where(np.isfinite(report.cov_log), report.cov_log, 0.0)
+    s = -(c_l / scale) @ (jl.T @ jm)
+    s[~np.isfinite(np.diag(report.cov_log))] = 0.0
+    unseen = ~np.isfinite(np.diag(sig_m))
+    sig_f = np.where(np.isfinite(sig_m), sig_m, 0.0)
+    c_ll = report.cov_log + s @ sig_f @ s.T
+    c_lm = s @ sig_f
+    moved = np.any(s[:, unseen] != 0.0, axis=1)
+    c_ll[np.ix_(moved, moved)] = np.inf
+    c_lm[np.ix_(moved, unseen)] = np.inf
     cov = np.block([[c_ll, c_lm], [c_lm.T, sig_m]])
     names = lub + mach
     rel = np.sqrt(np.maximum(np.diag(cov), 0.0))

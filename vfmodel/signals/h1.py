@@ -49,7 +49,14 @@ from vfmodel.signals.checks import (
     warn_clipping,
 )
 
-__all__ = ["H1Result", "default_nperseg", "h1_analysis", "h1_analysis_blocks", "h1_estimate"]
+__all__ = [
+    "H1Result",
+    "default_nperseg",
+    "h1_analysis",
+    "h1_analysis_blocks",
+    "h1_estimate",
+    "welch_power",
+]
 
 Detrend = Literal["constant", "linear", "none"]
 _SEG_BATCH = 64  # segments transformed at once (bounds the memory of one batch)
@@ -138,6 +145,24 @@ def _check_welch(
     except ValueError as err:
         raise InputError(f"unknown window: {err}", place="window", found=repr(window)) from None
     return nperseg, nov, win
+
+
+def welch_power(x: ArrayLike, nperseg: int | None = None,
+                window: str = "hann") -> NDArray[np.float64]:
+    """Welch average of ``|rfft(window * segment)|^2`` for each row of ``x``
+    (channels x samples): half-overlapping segments (default length
+    :func:`default_nperseg`), no detrending, unscaled (every bin alike). Returns
+    (channels, nperseg // 2 + 1)."""
+    buf = np.atleast_2d(np.asarray(x, dtype=float))
+    n = buf.shape[1]
+    nps, nov, win = _check_welch(n, nperseg, None, window, "none")
+    if nps > n:
+        raise InputError("nperseg is longer than the record", place="nperseg",
+                         found=f"{nps} > {n} samples")
+    step = nps - nov
+    n_seg = (n - nps) // step + 1
+    s = _segment_sum(buf, n_seg, nps, step, win, "none")
+    return np.real(np.einsum("fcc->cf", s)) / n_seg
 
 
 def _n_effective(win: NDArray[np.float64], step: int, k: int) -> float:
