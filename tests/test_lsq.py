@@ -53,3 +53,26 @@ def test_compressed_fit_follows_the_full_fit() -> None:
     # trajectories agree to rounding (measured 6e-12 on a 50,000 x 30 case)
     assert full.nfev == short.nfev
     assert np.max(np.abs(full.x - short.x)) < 1e-8
+
+
+def test_joint_gate_test_abandons_only_what_cannot_reach_the_gate() -> None:
+    # greybox.identify._gate_test: the spectra misfit at accepted points (the start is
+    # point 1); limit 1.1, 25 evaluations allowed
+    from vfmodel.greybox.identify import _gate_test
+
+    def run(misfits: list[float], nfev_per_step: int = 1) -> int | None:
+        stop = _gate_test(lambda q: float(q), 1.1, 25)  # type: ignore[arg-type]
+        for k, m in enumerate(misfits, start=1):
+            if stop(m, k, k * nfev_per_step):  # type: ignore[arg-type]
+                return k
+        return None
+
+    # stuck above the gate (bench 105's trace): abandoned at the second accepted step
+    assert run([1.0, 1.175, 1.177, 1.177]) == 3
+    # above the gate but falling fast enough to reach it in the evaluations left: kept
+    # (at point 3: 1.30 - 0.05 * 22 < 1.1)
+    assert run([1.0, 1.35, 1.30, 1.25, 1.20, 1.15, 1.10, 1.08]) is None
+    # below the gate: never abandoned
+    assert run([1.0, 1.05, 1.04, 1.06, 1.09]) is None
+    # the same slow fall with few evaluations left: abandoned (1.30 - 0.05 * 1 > 1.1)
+    assert run([1.0, 1.35, 1.30], nfev_per_step=8) == 3
