@@ -25,7 +25,7 @@ def _sections(value: str) -> tuple[int, ...]:
 
 @click.command()
 @click.argument("dataset", type=click.Path(path_type=Path))
-@click.option("--sections", default="2,3,4", show_default=True,
+@click.option("--sections", default="2,3,4,5,6", show_default=True,
               help="Candidate winding sections per phase (2 = the paper's model); the "
                    "identification keeps the best the spectra support.")
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")

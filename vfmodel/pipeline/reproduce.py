@@ -43,7 +43,7 @@ from vfmodel.greybox.bearing import (
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS
-from vfmodel.greybox.identify import Identification, RotatingFit, identify
+from vfmodel.greybox.identify import SECTIONS, Identification, RotatingFit, identify
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
@@ -132,7 +132,7 @@ def _f(x: float) -> float | None:
 
 
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
-              sections: Sequence[int] = (2, 3, 4), blackbox: bool = True,
+              sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record") -> ReproduceResult:
     """Run the paper's pipeline on ``dataset`` (see the module docstring)."""
