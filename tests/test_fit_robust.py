@@ -131,6 +131,23 @@ def test_certificate_agrees_with_dense_sampling(name: str) -> None:
     assert _dense_min_margin(passive, f[0], f[-1]) >= -1e-12
 
 
+@pytest.mark.parametrize("name", ["open.s2p", "wr2p2,line1.s2p"])
+def test_lossless_file_enforced_within_1_2x_of_its_fit(name: str) -> None:
+    # noise-free, lossless data (sigma_max 1 to 1e-9): the default margin follows the fit
+    # error (1e-6 fixed moved ntwk1/open 2000-10000x their 3-6e-10 fit error); the
+    # enforced model stays within 1.2x of max(fit error, data floor) (issue 13) and is
+    # passive by dense sampling
+    data = read_spectrum(SKRF_DATA / name)
+    plain = run_fit([data], delay="auto")
+    res = run_fit([data], delay="auto", passive=True)
+    assert res.passivity is not None and res.passivity.passive
+    floor = res.data_passivity.floor if res.data_passivity else 0.0
+    assert res.unconstrained_rel_rms_error == plain.rel_rms_error
+    assert res.rel_rms_error <= 1.2 * max(plain.rel_rms_error, floor)
+    f = res.data.freq_hz
+    assert _dense_min_margin(res.model, f[0], f[-1]) >= -1e-12
+
+
 # ---------------------------------------------------------------------- one data argument
 def test_one_data_argument_everywhere() -> None:
     path = SKRF_DATA / "ro,3.s1p"
