@@ -82,17 +82,6 @@ def _psd_rows(dc: DConstraint, n_var: int) -> tuple[sparse.csc_matrix, FloatArra
     return a, b, k
 
 
-def _lower_bound(a_y: FloatArray, b: FloatArray) -> float:
-    """Largest distance from y = 0 to a cut ``a_y y >= b`` (a lower bound on the norm
-    of the optimum), or 1 when no cut is violated at 0."""
-    if b.size == 0:
-        return 1.0
-    norms = np.linalg.norm(a_y, axis=1)
-    dist = np.where(norms > 0, np.maximum(b, 0.0) / np.where(norms > 0, norms, 1.0), 0.0)
-    top = float(np.max(dist))
-    return top if top > 0 else 1.0
-
-
 def _block_inverse(r_blocks: sparse.spmatrix, size: int) -> sparse.csr_matrix:
     """Inverse of a block-diagonal matrix of invertible square blocks of ``size``."""
     r = sparse.csr_matrix(r_blocks)
@@ -142,19 +131,52 @@ def solve_qp(
     # the dual: y = -A^T z with z in the (self-dual) cones minimising
     # 1/2 z^T (A A^T) z + b^T z -- as many unknowns as constraints, a dense Gram matrix
     a_dense = a_all.toarray()
-    gram = sparse.triu(sparse.csc_matrix(a_dense @ a_dense.T), format="csc")
     # objective scale: Clarabel's duality-gap test is relative to max(1, |objective|),
     # so an optimum of 1e-18 (a change of 1e-9, lossless data) passes for "Solved" at
     # any point whose objective is below the tolerance (measured: changes of 4e-6 for an
-    # optimum of 2e-9). Dividing P and q by the square of a lower bound on ||y|| (the
-    # distance to the most violated cut) makes the optimum at least 1/2; the bound is
-    # floored at 1e-6 (scale 1e-12): below, the O(1) data of the D cone scaled by 1/scale
-    # stall the solver, while the gap test (1e-10 of the scaled objective) still fixes y
-    # to about 1e-11 absolute.
-    scale = max(_lower_bound(a_dense[: a.shape[0]], -b_all[: a.shape[0]]) ** 2, 1e-12)
-    gram, q = gram / scale, b_all / scale
+    # optimum of 2e-9 on ntwk1.s2p). A program whose objective ends below _SMALL_OBJECTIVE
+    # is solved again with P and q divided by the squared size of its solution (the same
+    # minimiser, an objective near 1/2), at most _RESCALES times; a rescaled program that
+    # ends without a solution (the O(1) data of the D cone divided by a tiny scale can
+    # stall the solver) leaves the previous solution. Well-scaled programs are solved once
+    # (an a-priori scale from the cuts alone blew the Gram matrix of an ill-conditioned
+    # 3-point program up to 1e14 and its solves to 200 iterations).
+    gram = sparse.triu(sparse.csc_matrix(a_dense @ a_dense.T), format="csc")
     m = a_dense.shape[0]
     neg_eye = -sparse.identity(m, format="csc")
+    statuses: list[str] = []
+    scale = 1.0
+    best: FloatArray | None = None
+    for _ in range(_RESCALES + 1):
+        y, status = _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts,
+                                a_dense)
+        statuses += status
+        if y is None:
+            break
+        best = rinv @ y
+        size2 = float(y @ y)
+        if status[-1] != "Solved" or 0.5 * size2 / scale >= _SMALL_OBJECTIVE or size2 == 0:
+            break
+        scale = size2
+    return best, statuses
+
+
+_SMALL_OBJECTIVE = 1e-6  # scaled objective below which the program is solved again
+_RESCALES = 2
+
+
+def _solve_dual(
+    gram: sparse.csc_matrix,
+    q: FloatArray,
+    neg_eye: sparse.csc_matrix,
+    cones: list[Any],
+    attempts: tuple[dict[str, Any], ...],
+    a_dense: FloatArray,
+) -> tuple[FloatArray | None, list[str]]:
+    """One dual program (settings tried in turn); y = -A^T z and the statuses."""
+    import clarabel
+
+    m = gram.shape[0]
     statuses: list[str] = []
     almost: FloatArray | None = None
     for extra in attempts:
@@ -173,12 +195,11 @@ def solve_qp(
         z = np.asarray(sol.x, dtype=float)
         if not np.all(np.isfinite(z)):
             continue
-        x = -(a_dense.T @ z)
-        x = rinv @ x
+        y = -(a_dense.T @ z)
         if status == "Solved":
-            return x, statuses
+            return y, statuses
         if status == "AlmostSolved":
-            almost = x
+            almost = y
     return almost, statuses
 
 
