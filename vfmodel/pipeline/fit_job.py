@@ -26,6 +26,7 @@ from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
+from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
 from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
 
@@ -161,6 +162,8 @@ def run_fit(
                 failure = str(err)
             bound = _ENFORCE_RATIO * max(unconstrained_rel, dp.floor if dp else 0.0)
             if retry and (first is None or fit_errors(first[0], data)[1] > bound):
+                first = _extra_poles_retry(model, data, first, report, first_iter, margin)
+            if retry and (first is None or fit_errors(first[0], data)[1] > bound):
                 first = _out_of_band_retry(data, first, fit_kw, enforce_iterations,
                                            margin, bound)
             if first is None:
@@ -201,6 +204,34 @@ def enforce_margin_for(fit_error: float, floor: float) -> float:
 _FIRST_ITERATIONS = 15  # S: programs of the first enforcement (anchored refits follow)
 _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cost)
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
+
+
+def _extra_poles_retry(
+    model: RationalModel,
+    data: FrequencyData,
+    first: tuple[RationalModel, PassivityReport, FitReport] | None,
+    report: FitReport,
+    max_iter: int,
+    margin: float,
+) -> tuple[RationalModel, PassivityReport, FitReport] | None:
+    """Enforce again with real poles added out of band (zero residues,
+    :func:`vfmodel.fitting.out_of_band_poles.with_out_of_band_poles`); keep the passive model
+    closest to the data. Not when the data has fewer real equations per response than
+    the augmented model has unknowns plus two (as the fit's order limit): poles the
+    samples cannot see left the programs of a 3-point file ill-conditioned (30 programs,
+    290 s, no certificate)."""
+    extended = with_out_of_band_poles(model, data.freq_hz)
+    if extended.n_poles + 3 > 2 * data.n_freq:
+        return first
+    try:
+        enforced, check = enforce_passivity(extended, data, max_iter=max_iter, margin=margin,
+                                            allow_active=True)
+    except PassivityError:
+        return first
+    if not check.passive or (first is not None and fit_errors(enforced, data)[1]
+                             >= fit_errors(first[0], data)[1]):
+        return first
+    return enforced, check, replace(report, order=enforced.n_poles)
 
 
 def _out_of_band_retry(
