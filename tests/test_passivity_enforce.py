@@ -100,9 +100,10 @@ def test_direct_program_matches_cvxpy(monkeypatch: pytest.MonkeyPatch) -> None:
         grabbed: list[tuple[Any, Any, Any]] = []
         orig = enforce_mod._solve
 
-        def grab(setup: Any, a: Any, b: Any, _orig: Any = orig, _g: Any = grabbed) -> Any:
+        def grab(setup: Any, a: Any, b: Any, scale: float = 1.0, _orig: Any = orig,
+                 _g: Any = grabbed) -> Any:
             _g.append((setup, a, b))
-            return _orig(setup, a, b)
+            return _orig(setup, a, b, scale=scale)
 
         monkeypatch.setattr(enforce_mod, "_solve", grab)
         enforce_passivity(model)

@@ -97,12 +97,15 @@ def solve_qp(
     b: FloatArray,
     d_constraint: DConstraint | None,
     attempts: tuple[dict[str, Any], ...],
+    scale: float = 1.0,
 ) -> tuple[FloatArray | None, list[str]]:
     """Minimise ||R x||^2 subject to ``a x >= b`` and ``d_constraint``.
 
     Settings in ``attempts`` are tried in turn until Clarabel reports "Solved"; when none
     does, the last "AlmostSolved" point is returned (the caller certifies the model it
-    leads to independently). Returns (x or None, the statuses).
+    leads to independently). ``scale``: the expected ||R x||^2 (e.g. the previous
+    program's of a cutting-plane loop, whose optimum only grows as cuts are added), so
+    that one solve is well scaled (see below). Returns (x or None, the statuses).
     """
     import clarabel
 
@@ -145,7 +148,7 @@ def solve_qp(
     m = a_dense.shape[0]
     neg_eye = -sparse.identity(m, format="csc")
     statuses: list[str] = []
-    scale = 1.0
+    scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     best: FloatArray | None = None
     for _ in range(_RESCALES + 1):
         y, status = _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts,
