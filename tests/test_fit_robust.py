@@ -131,6 +131,45 @@ def test_certificate_agrees_with_dense_sampling(name: str) -> None:
     assert _dense_min_margin(passive, f[0], f[-1]) >= -1e-12
 
 
+@pytest.mark.parametrize("name", ["open.s2p", "wr2p2,line1.s2p", "ntwk1.s2p",
+                                  "delay_short.s1p", "ring slot measured.s1p"])
+def test_file_enforced_within_1_2x_of_its_fit(name: str) -> None:
+    # noise-free, lossless data (sigma_max 1 to 1e-9): the default margin follows the fit
+    # error (1e-6 fixed moved ntwk1/open 2000-10000x their 3-6e-10 fit error); models
+    # above 1 only out of band (delay_short: sigma(D) 1.00015; ring slot measured:
+    # sigma(D) 1.24 for samples below 0.92) are corrected through real poles added out
+    # of band (before: 18x and 2.2x). The enforced model stays within 1.2x of max(fit
+    # error, data floor) (issue 13) and is passive by dense sampling
+    data = read_spectrum(SKRF_DATA / name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)  # ring slot measured: far from noise
+        plain = run_fit([data], delay="auto")
+        res = run_fit([data], delay="auto", passive=True)
+    assert res.passivity is not None and res.passivity.passive
+    floor = res.data_passivity.floor if res.data_passivity else 0.0
+    assert res.unconstrained_rel_rms_error == plain.rel_rms_error
+    assert res.rel_rms_error <= 1.2 * max(plain.rel_rms_error, floor)
+    f = res.data.freq_hz
+    assert _dense_min_margin(res.model, f[0], f[-1]) >= -1e-12
+
+
+def test_out_of_band_poles_leave_the_response() -> None:
+    # added real poles carry zero residues: the response is the same to rounding, at
+    # least one decade above and below the band
+    from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
+
+    data = read_spectrum(SKRF_DATA / "ring slot measured.s1p")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)
+        model, _ = vector_fit(data)
+    ext = with_out_of_band_poles(model, data.freq_hz)
+    f = data.freq_hz
+    assert ext.n_poles == model.n_poles + 5
+    assert np.all(np.abs(ext.poles[model.n_poles:].real) >= 2 * np.pi * 0.1 * f[0] * 0.999)
+    g = np.geomspace(f[0] / 10, f[-1] * 10, 500)
+    assert np.max(np.abs(ext(g) - model(g))) <= 1e-14 * np.max(np.abs(model(g)))
+
+
 # ---------------------------------------------------------------------- one data argument
 def test_one_data_argument_everywhere() -> None:
     path = SKRF_DATA / "ro,3.s1p"
@@ -291,11 +330,13 @@ def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
 
 
 # ---------------------------------------------------------------------- noise-free data
-@pytest.mark.parametrize("name", ["ntwk1.s2p", "open.s2p", "short.s2p"])
+@pytest.mark.parametrize("name", ["ntwk1.s2p", "open.s2p", "short.s2p", "wr2p2,line.s2p"])
 def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
     # simulated (noise-free) files: the out-of-band anchors and the ridge that hold the
     # poles in place cap the accuracy near 1e-7; the last relocation with lighter ones
-    # must reach scikit-rf's auto_fit on the same file (same error measure, 1.1x or 1e-9)
+    # must reach scikit-rf's auto_fit on the same file (same error measure, 1.1x or 1e-9).
+    # wr2p2,line: a growth step 9 -> 13 poles fitting worse is retried with one pair
+    # (before: a 'plateau' at 8 poles, 2.1e-6 against scikit-rf's 8.0e-7)
     net = skrf.Network(str(SKRF_DATA / name))
     data = read_spectrum(SKRF_DATA / name).to_kind("S")
     with warnings.catch_warnings():

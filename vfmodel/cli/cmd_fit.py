@@ -73,8 +73,10 @@ def _order(value: str) -> int | str:
               show_default=True, help="Convex programs of the passivity enforcement.")
 @click.option("--enforce-margin", type=click.FloatRange(min=0, max=0.1, min_open=True,
                                                         max_open=True),
-              default=1e-6, show_default=True,
-              help="Relative passivity margin required at the cut frequencies.")
+              default=None,
+              help="Relative passivity margin required at the cut frequencies "
+              "[default: 1e-6, or a tenth of max(fit error, data floor) when smaller, "
+              "at least 1e-10].")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Also write a SPICE subcircuit '.subckt NAME p1..pN ref'.")
 @click.option("--subckt-name", default="vfmodel", show_default=True,
@@ -85,7 +87,7 @@ def _order(value: str) -> int | str:
 def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
         max_order: int | None, target_error: float | None, delay: str, dc: str,
         passive: bool,
-        enforce_iterations: int, enforce_margin: float, spice: Path | None,
+        enforce_iterations: int, enforce_margin: float | None, spice: Path | None,
         subckt_name: str, no_plot: bool, out_dir: Path, quiet: bool) -> None:
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
     model with common poles; several files make a block-diagonal model. Writes

@@ -441,6 +441,7 @@ def enforce(
     hits: dict[float, int] = {}
     new_f = _band_points(first.bands_hz, first.worst_freq_hz)
     report = first
+    scale = 1.0  # objective size of the last program (the next one's scale)
     for it in range(1, max_iter + 1):
         pool = np.union1d(pool, new_f)
         extra = np.setdiff1d(new_f, grid)
@@ -458,7 +459,8 @@ def enforce(
         target = np.maximum(target, margin)
         a_new, b_new = _cuts(setup, current, new_f, _response(model, new_f), target)
         a_all, b_all = np.vstack([a_all, a_new]), np.concatenate([b_all, b_new])
-        x_val = _solve(setup, a_all, b_all)
+        x_val = _solve(setup, a_all, b_all, scale=scale)
+        scale = float(np.sum((setup.r_blocks @ x_val) ** 2))
         current = setup.apply(x_val)
         # drop cuts far from active (they only cost solver time); a dropped cut that
         # matters again is re-added from the grid screen below
@@ -529,7 +531,7 @@ def _constant_projection(model: RationalModel) -> tuple[RationalModel, Passivity
                                      "rel_rms_change": rel})
 
 
-def _solve(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
+def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0) -> FloatArray:
     """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x.
 
     Clarabel directly (:mod:`vfmodel.fitting._qp`); cvxpy with the same solver only when
@@ -540,7 +542,7 @@ def _solve(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
         last = np.arange(setup.n_b - 1, a.shape[1], setup.n_b)
         bound = 1.0 - setup.margin if m.kind == "S" else setup.margin * setup.d_size
         dc = DConstraint(m.kind, m.dd / setup.h0, last, float(setup.col[-1]), bound)
-    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _DIRECT)
+    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _DIRECT, scale)
     if x is not None:
         return x
     return _solve_cvxpy(setup, a, b)

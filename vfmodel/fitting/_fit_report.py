@@ -113,7 +113,7 @@ def _to_model(
     fit_e: bool,
 ) -> RationalModel:
     reps = coef.reps
-    nr = int(np.sum(reps.imag == 0))
+    nr = reps.size - int(np.count_nonzero(reps.imag))
     m = coef.c.shape[0]
     poles: list[complex] = []
     res: list[NDArray[np.complex128]] = []

@@ -56,6 +56,7 @@ _TRIAL_TOL = 0.01  # relative error change that ends a trial
 _TRIAL_ITERATIONS = 4  # relocations of a one-pole-less trial at most
 _FINAL_PATIENCE = 2  # relocations without improvement that end a trial or the final fit
 _WINDOW = 11  # samples of the local median of the noise estimator
+_FAILED_STEP = 2.0  # a growth step fitting this much worse than the best is retried smaller
 
 
 @dataclass(frozen=True)
@@ -216,6 +217,7 @@ def auto_order(
     best_err = err_last = np.inf
     why = ""
     stall = n_gain = added = 0
+    grown: tuple[NDArray[np.complex128], NDArray[np.complex128]] | None = None
     while True:
         res = _relocate.iterate(
             prob,
@@ -228,6 +230,20 @@ def auto_order(
         )
         n_it += res.n_iterations
         history.extend(res.history)
+        if res.weighted_rel_rms > _FAILED_STEP * best_err and grown is not None \
+                and grown[1].size > 1:
+            # more poles fitting far worse than fewer did: the step was too large for one
+            # relocation to place (wr2p2,line.s2p: 9 -> 13 poles went from 3.6e-6 to
+            # 2.0e-5 and growth stopped at a 'plateau'); retry with the largest peak only.
+            # (Noisy files past their floor fit up to ~1.7x worse: a plateau, kept.)
+            small = _relocate.iterate(
+                prob, core.sort_reps(np.concatenate([grown[0], grown[1][:1]])),
+                max_iterations=_GROW_ITERATIONS, tol=_GROW_TOL, stable=stable,
+                precise=None, err_hint=err_last)
+            n_it += small.n_iterations
+            history.extend(small.history)
+            if small.weighted_rel_rms < res.weighted_rel_rms:
+                res, added = small, core.n_poles(grown[1][:1])
         coef = _prune(prob, res.coef, _DROP_FRACTION * noise * data_rms)
         err = err_last = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         n = core.n_poles(coef.reps)
@@ -256,6 +272,7 @@ def auto_order(
         else:
             new = _new_poles(prob, coef, n_pairs, w_lo)
         added = core.n_poles(new)
+        grown = (coef.reps, new)
         reps = core.sort_reps(np.concatenate([coef.reps, new]))
     best_err = min(t[1] for t in tried)
     # at the noise floor the last model is the pick; at a plateau the best error is the floor

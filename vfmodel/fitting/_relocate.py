@@ -149,7 +149,7 @@ def relocate_poles(
     sigma = pf @ c_s + d_s
     deviation = float(np.max(np.abs(sigma / d_s - 1.0)))
     # zeros of sigma: eig(A - b c^T / d) in the real block form
-    nr = int(np.sum(reps.imag == 0))
+    nr = reps.size - int(np.count_nonzero(reps.imag))
     a_mat = np.zeros((n, n))
     bvec = np.zeros(n)
     a_mat[np.arange(nr), np.arange(nr)] = reps[:nr].real

@@ -143,7 +143,7 @@ class FixedOrderResult:
 # ---------------------------------------------------------------------- poles
 def n_poles(reps: ComplexArray) -> int:
     """Number of poles (each complex pole of a pair counted) of the representatives."""
-    return int(np.sum(reps.imag == 0) + 2 * np.sum(reps.imag != 0))
+    return int(reps.size + np.count_nonzero(reps.imag))
 
 
 def sort_reps(reps: ComplexArray) -> ComplexArray:
@@ -214,7 +214,7 @@ def starting_poles(
 # ---------------------------------------------------------------------- basis
 def partial_fractions(s: ComplexArray, reps: ComplexArray) -> ComplexArray:
     """Complex values (K, N) of the real partial-fraction basis at ``s``."""
-    nr = int(np.sum(reps.imag == 0))
+    nr = reps.size - int(np.count_nonzero(reps.imag))
     real, cplx = reps[:nr].real, reps[nr:]
     out = np.empty((s.size, nr + 2 * cplx.size), dtype=complex)
     out[:, :nr] = 1.0 / (s[:, None] - real[None, :])
@@ -403,7 +403,7 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
         rinv = np.linalg.solve(r, np.broadcast_to(np.eye(nk), r.shape))
         x = rinv @ (np.swapaxes(q, 1, 2) @ b)  # (Mw, Nk, M or 1), scaled coordinates
         s_mat = rinv @ np.swapaxes(rinv, 1, 2)  # (Mw, Nk, Nk)
-        nr = int(np.sum(reps.imag == 0))
+        nr = reps.size - int(np.count_nonzero(reps.imag))
         j1 = np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
         cost = np.zeros(reps.size)
         real_j = j1[:nr]
@@ -429,7 +429,7 @@ def pole_contributions(prob: Problem, coef: Coefficients) -> FloatArray:
     basis columns of each representative (no (K, N, M) intermediate).
     """
     pf = partial_fractions(prob.s, coef.reps)  # (K, N)
-    nr = int(np.sum(coef.reps.imag == 0))
+    nr = coef.reps.size - int(np.count_nonzero(coef.reps.imag))
     w2t = (prob.w**2).T  # (Mw, K)
     diag = w2t @ (pf.real**2 + pf.imag**2)  # (Mw, N)
     g1, g2 = pf[:, nr::2], pf[:, nr + 1 :: 2]

@@ -26,6 +26,7 @@ from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
+from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
 from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
 
@@ -95,7 +96,7 @@ def run_fit(
     delay: float | Literal["auto", "none"] = "none",
     dc: DcMode = "enforce",
     enforce_iterations: int = 30,
-    enforce_margin: float = 1e-6,
+    enforce_margin: float | None = None,
 ) -> FitJobResult:
     """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
 
@@ -103,6 +104,8 @@ def run_fit(
     The data's own passivity violation floor is measured first; with ``passive``, active
     data (floor above 5 %) are refused, and an enforcement that finds no certificate is
     reported as an :class:`InputError` naming the options that control it.
+    ``enforce_margin`` None: 1e-6, or a tenth of max(fit error, data floor) when that is
+    smaller, at least 1e-10 (:func:`enforce_margin_for`).
     """
     data = combine_spectra(spectra, kind)
     art: DataArtifacts | None = None
@@ -147,18 +150,23 @@ def run_fit(
             retry = data.kind == "S" and data.n_in <= _RETRY_PORTS
             first_iter = min(enforce_iterations, _FIRST_ITERATIONS) if retry \
                 else enforce_iterations
+            margin = enforce_margin if enforce_margin is not None else \
+                enforce_margin_for(unconstrained_rel, dp.floor if dp else 0.0)
             try:
                 enforced, pas_e = enforce_passivity(
-                    model, data, max_iter=first_iter, margin=enforce_margin,
+                    model, data, max_iter=first_iter, margin=margin,
                     allow_active=True,
                 )
                 first = (enforced, pas_e, report)
             except PassivityError as err:
                 failure = str(err)
             bound = _ENFORCE_RATIO * max(unconstrained_rel, dp.floor if dp else 0.0)
+            if retry and data.n_in <= _EXTRA_POLES_PORTS and \
+                    (first is None or fit_errors(first[0], data)[1] > bound):
+                first = _extra_poles_retry(model, data, first, report, first_iter, margin)
             if retry and (first is None or fit_errors(first[0], data)[1] > bound):
                 first = _out_of_band_retry(data, first, fit_kw, enforce_iterations,
-                                           enforce_margin, bound)
+                                           margin, bound)
             if first is None:
                 raise InputError(
                     f"passivity enforcement found no certificate: {failure}",
@@ -183,9 +191,52 @@ def run_fit(
 
 
 _ENFORCE_RATIO = 1.2  # enforced error within this factor of max(fit error, data floor)
+_MARGIN = (1e-6, 0.1, 1e-10)  # default margin, its share of the error bound, its floor
+
+
+def enforce_margin_for(fit_error: float, floor: float) -> float:
+    """Default passivity margin of ``fit --passive``: 1e-6, or a tenth of the error the
+    enforced model is held to (max of fit error and data floor) when that is smaller, at
+    least 1e-10. A fixed 1e-6 pulled every singular value of a lossless model (fit to
+    5e-10) 1e-6 inside the unit circle, i.e. a change 2000x its error (ntwk1.s2p, open.s2p);
+    the floor keeps 100x above the certificate's tolerance (1e-12 of the response)."""
+    base, share, least = _MARGIN
+    return float(min(base, max(share * max(fit_error, floor), least)))
 _FIRST_ITERATIONS = 15  # S: programs of the first enforcement (anchored refits follow)
 _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cost)
+# extra out-of-band poles for S models of at most this many ports: the programs grow with
+# ports^2 x poles unknowns and the cuts' mixtures; on a 3-port HFSS export (401 points)
+# the retry ran for more than 7 minutes (loaded); its measured gains were all on 1-2 ports
+_EXTRA_POLES_PORTS = 2
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
+
+
+def _extra_poles_retry(
+    model: RationalModel,
+    data: FrequencyData,
+    first: tuple[RationalModel, PassivityReport, FitReport] | None,
+    report: FitReport,
+    max_iter: int,
+    margin: float,
+) -> tuple[RationalModel, PassivityReport, FitReport] | None:
+    """Enforce again with real poles added out of band (zero residues,
+    :func:`vfmodel.fitting.out_of_band_poles.with_out_of_band_poles`); keep the passive model
+    closest to the data. Not when the data has fewer real equations per response than
+    the augmented model has unknowns plus two (as the fit's order limit): poles the
+    samples cannot see left the programs of a 3-point file ill-conditioned (30 programs,
+    290 s, no certificate)."""
+    extended = with_out_of_band_poles(model, data.freq_hz)
+    if extended.n_poles + 3 > 2 * data.n_freq:
+        return first
+    try:
+        enforced, check = enforce_passivity(extended, data, max_iter=max_iter, margin=margin,
+                                            allow_active=True)
+    except PassivityError:
+        return first
+    if not check.passive or (first is not None and fit_errors(enforced, data)[1]
+                             >= fit_errors(first[0], data)[1]):
+        return first
+    return enforced, check, replace(report, order=enforced.n_poles)
 
 
 def _out_of_band_retry(
