@@ -21,6 +21,11 @@ MAPE 1.62 -> 1.68 %; with the capacitances alone (no path) 19/14/11/8/6 %.
 
 The covariance of the joint fit gives each speed's lubricant its uncertainty including
 that of the shared capacitances (:func:`speed_report`).
+
+Opt-in (``identify(joint=True)``) since 2026-11-24: with the shaft and ball inductances
+bounded physically and up to 6 winding sections, the stage-wise identification fits these
+benches without it, and where it was kept its intervals covered the truth less often
+(:func:`vfmodel.greybox.identify.identify`).
 """
 
 from __future__ import annotations
