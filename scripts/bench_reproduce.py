@@ -34,12 +34,14 @@ from typing import Any
 
 import numpy as np
 
+from vfmodel.greybox.effects import SECTIONS
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", nargs="?", default="data/pmsm40kw")
     ap.add_argument("--out", default=None, help="output directory (default: a temp dir)")
-    ap.add_argument("--sections", default="2,3,4,5,6")
+    ap.add_argument("--sections", default=",".join(map(str, SECTIONS)))
     ap.add_argument("--ngspice", action="store_true")
     ap.add_argument("--save", default=None, help="write times and figures as JSON")
     ap.add_argument("--baseline", default=None,

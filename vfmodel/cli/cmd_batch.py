@@ -16,6 +16,7 @@ from typing import Any
 import click
 
 from vfmodel.cli._common import progress_bar, quiet_option
+from vfmodel.greybox.effects import SECTIONS
 
 __all__ = ["batch", "fit_job", "reproduce_job"]
 
@@ -142,7 +143,7 @@ def batch_fit(spectra: tuple[Path, ...], order: str, passive: bool, workers: int
 @click.option("--no-blackbox", is_flag=True, help="As for 'vfmodel reproduce'.")
 @click.option("--max-nfev", default=40, show_default=True, type=click.IntRange(5, 1000),
               help="As for 'vfmodel reproduce'.")
-@click.option("--sections", default="2,3,4,5,6", show_default=True,
+@click.option("--sections", default=",".join(map(str, SECTIONS)), show_default=True,
               help="As for 'vfmodel reproduce'.")
 @_workers
 @_scheduler

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
+from vfmodel.greybox.effects import SECTIONS
 
 REPRODUCE_OUTPUTS = ("results.json", "report.html", "network_*rpm.cir", "fig*.png",
                      "blackbox_errors.png", "poles.png")
@@ -25,7 +26,7 @@ def _sections(value: str) -> tuple[int, ...]:
 
 @click.command()
 @click.argument("dataset", type=click.Path(path_type=Path))
-@click.option("--sections", default="2,3,4,5,6", show_default=True,
+@click.option("--sections", default=",".join(map(str, SECTIONS)), show_default=True,
               help="Candidate winding sections per phase (2 = the paper's model); the "
                    "identification keeps the best the spectra support.")
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")

@@ -20,8 +20,8 @@ from typing import get_args
 
 from vfmodel._choices import Effect, check_choice
 
-__all__ = ["ALL_EFFECTS", "EFFECT_INFO", "EFFECT_LOCATIONS", "PAPER_EFFECTS", "EffectInfo",
-           "check_effects"]
+__all__ = ["ALL_EFFECTS", "EFFECT_INFO", "EFFECT_LOCATIONS", "PAPER_EFFECTS", "SECTIONS",
+           "EffectInfo", "check_effects"]
 
 
 @dataclass(frozen=True)
@@ -196,6 +196,16 @@ EFFECT_INFO: dict[str, EffectInfo] = {
 ALL_EFFECTS: frozenset[str] = frozenset(get_args(Effect))
 PAPER_EFFECTS: frozenset[str] = ALL_EFFECTS - {"fixture_inductance"}
 """The full grey-box model of the reference paper: every effect except the fixture."""
+
+SECTIONS = (2, 3, 4, 5, 6)
+"""Default candidate numbers of winding sections per phase (``identify``, ``reproduce``,
+the CLI's ``--sections``; the next is tried only while the previous one lowered the
+spectra's reduced chi-square by more than ``min_gain``, the lowest is kept). Up to 4 until
+2026-11-24; on unseen independent benches 110, 111, 113, 114 (5-8 coils per phase) the
+spectra's chi2 still fell 19/44/23/28 % from 4 to 5 sections, and with 4 the rotating
+records of bench 113 could not be fitted (lubricant chi2 ~1e4, peak errors up to 55 %;
+with up to 6: chi2 <= 13, errors <= 2.3 %). A machine that needs fewer stops earlier
+(data/pmsm40kw: 4)."""
 
 
 EFFECT_LOCATIONS: dict[str, str] = {

@@ -66,7 +66,7 @@ from vfmodel.greybox.bearing import (
     common_mode,
     divider_capacitances,
 )
-from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS, check_effects
 from vfmodel.greybox.joint import SHARED, SpeedCopy, extend, speed_params, tag
 from vfmodel.greybox.lsq import fit_log, log_covariance, log_start
 from vfmodel.greybox.network import NetSpec
@@ -107,15 +107,6 @@ Term = ImpedanceTerm | BearingTerm | RecordTerm
 RotatingFit = Literal["record", "h1"]
 """Condition 2 at the rotating speeds: output-error fit of the whole record
 (:mod:`vfmodel.greybox.record_fit`, default) or the H1 transfer (paper eq. 21)."""
-
-SECTIONS = (2, 3, 4, 5, 6)
-"""Default candidate numbers of winding sections per phase (:func:`identify`; the next is
-tried only while the previous one lowered the spectra's reduced chi-square by more than
-``min_gain``). Up to 4 until 2026-11-24; on unseen independent benches (5-8 coils per
-phase) the spectra still gained 20-43 % from 4 to 5 sections, and with 4 the rotating
-records could not be fitted (bench 113: lubricant chi2 ~1e4, peak errors up to 55 %; with
-up to 6: chi2 <= 13, errors <= 2.3 %). A machine that needs fewer stops earlier.
-"""
 
 JOINT_TRIGGER = 10.0
 """Reduced chi-square of a rotating record's lubricant stage from which the joint refit
@@ -417,7 +408,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         Run :func:`joint_stage` after the lubricant stages (off by default since
         2026-11-24: on independent benches 101-114, with up to 6 winding sections, it was
         kept on 4 of 14 and then left the bearing-capacitance intervals covering the truth
-        in 5 of 20 cases (20 of 20 without it) and the C_wr interval in 1 of 4, while the
+        in 5 of 20 cases (15 of 20 without it) and the C_wr interval in 1 of 4 (3 of 4
+        without), while the
         peak errors stayed alike: mean 1.89 vs 2.08 %, worst 11.4 vs 10.8 %; its 15-25 s
         are then saved).
     """

@@ -150,8 +150,9 @@ def run_fit(
             retry = data.kind == "S" and data.n_in <= _RETRY_PORTS
             first_iter = min(enforce_iterations, _FIRST_ITERATIONS) if retry \
                 else enforce_iterations
+            floor = dp.floor if dp else 0.0
             margin = enforce_margin if enforce_margin is not None else \
-                enforce_margin_for(unconstrained_rel, dp.floor if dp else 0.0)
+                enforce_margin_for(unconstrained_rel, floor)
             try:
                 enforced, pas_e = enforce_passivity(
                     model, data, max_iter=first_iter, margin=margin,
@@ -160,7 +161,7 @@ def run_fit(
                 first = (enforced, pas_e, report)
             except PassivityError as err:
                 failure = str(err)
-            bound = _ENFORCE_RATIO * max(unconstrained_rel, dp.floor if dp else 0.0)
+            bound = _ENFORCE_RATIO * max(unconstrained_rel, floor)
             if retry and data.n_in <= _EXTRA_POLES_PORTS and \
                     (first is None or fit_errors(first[0], data)[1] > bound):
                 first = _extra_poles_retry(model, data, first, report, first_iter, margin)
@@ -192,6 +193,13 @@ def run_fit(
 
 _ENFORCE_RATIO = 1.2  # enforced error within this factor of max(fit error, data floor)
 _MARGIN = (1e-6, 0.1, 1e-10)  # default margin, its share of the error bound, its floor
+_FIRST_ITERATIONS = 15  # S: programs of the first enforcement (anchored refits follow)
+_RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cost)
+# extra out-of-band poles for S models of at most this many ports: the programs grow with
+# ports^2 x poles unknowns and the cuts' mixtures; on a 3-port HFSS export (401 points)
+# the retry ran for more than 7 minutes (loaded); its measured gains were all on 1-2 ports
+_EXTRA_POLES_PORTS = 2
+_OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
 
 
 def enforce_margin_for(fit_error: float, floor: float) -> float:
@@ -202,13 +210,6 @@ def enforce_margin_for(fit_error: float, floor: float) -> float:
     the floor keeps 100x above the certificate's tolerance (1e-12 of the response)."""
     base, share, least = _MARGIN
     return float(min(base, max(share * max(fit_error, floor), least)))
-_FIRST_ITERATIONS = 15  # S: programs of the first enforcement (anchored refits follow)
-_RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cost)
-# extra out-of-band poles for S models of at most this many ports: the programs grow with
-# ports^2 x poles unknowns and the cuts' mixtures; on a 3-port HFSS export (401 points)
-# the retry ran for more than 7 minutes (loaded); its measured gains were all on 1-2 ports
-_EXTRA_POLES_PORTS = 2
-_OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
 
 
 def _extra_poles_retry(

@@ -42,8 +42,8 @@ from vfmodel.greybox.bearing import (
 )
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
-from vfmodel.greybox.effects import PAPER_EFFECTS
-from vfmodel.greybox.identify import SECTIONS, Identification, RotatingFit, identify
+from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
+from vfmodel.greybox.identify import Identification, RotatingFit, identify
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
