@@ -78,3 +78,30 @@ def test_shaft_frame_impedance_standstill_and_speed() -> None:
     c_meas = (1 / z3[k]).imag / (2 * np.pi * F[k])
     assert c_meas == pytest.approx(c_sum, rel=0.02)
     assert SHAFT_FRAME == ("SN", "0")
+
+
+def test_testbench_extras_from_the_truth_network() -> None:
+    """The project bench (benches/truth.py + drive): with identical bearings the DE and NDE
+    voltages agree (1e-8), and i_CM equals 1^T Y V of the machine alone (1e-6)."""
+    from benches.drive_extra import extra_transfer
+    from benches.truth import build_truth_network, truth_detail, truth_params
+    from vfmodel.greybox.drive import CableSpec, drive_circuit
+
+    det = replace(truth_detail(np.random.default_rng(0), n_coils=2, n_rungs=2),
+                  bearing_asym=1.0)
+    net = build_truth_network(truth_params(), det, state="rotating")
+    cable = CableSpec()
+    mna = drive_circuit(net, cable).mna
+    he = extra_transfer(mna, cable, F)
+    h = mna.response(F, INV, ("U", "V", "W", "SN"))
+    np.testing.assert_allclose(he[:, 0, :], h[:, 3, :], rtol=1e-8, atol=0)
+    pairs = [(p, "0") for p in PHASES]
+    z = net.mna.response(F, pairs, pairs)
+    np.testing.assert_allclose(he[:, 1, :], np.linalg.solve(z, h[:, :3, :]).sum(axis=1),
+                               rtol=1e-6, atol=0)
+    # the bench's own DE bearing (8 % more film capacitance) gives another voltage
+    net = build_truth_network(truth_params(), replace(det, bearing_asym=1.08),
+                              state="rotating")
+    mna = drive_circuit(net, cable).mna
+    ratio = extra_transfer(mna, cable, F)[:, 0, :] / mna.response(F, INV, ("SN",))[:, 0, :]
+    assert np.max(np.abs(ratio - 1)) > 1e-3
