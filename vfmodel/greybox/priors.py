@@ -50,6 +50,15 @@ slots, ``b_so`` slot opening):
   magnitude priors with gsd 3-5; dimensionless ladder ratios, loss fractions and relaxation
   times: ranges.
 
+Note (measured 2026-11-24): the reference paper's divider bearing capacitance, 18.1 nF at
+100 rpm (its Table IV), is about 100 times the Hertzian film of a bearing of a 40-kW
+machine (a 6210-size bearing at 100 rpm and 80 degC: film 44 nm, ``C_1`` ~ 0.15 nF). The
+paper-like ``lubricant.C_1 = 20 nF`` of ``default_params()`` (and the benches built on it)
+is therefore flagged, 3.9 sigma above the prior without geometry. The lumped ``C_1`` of
+such records absorbs more than the loaded contacts' film (grease-filled gaps, the races'
+whole surroundings); whether that calls for a wider film prior or another reading of
+``C_1`` is open.
+
 References
 ----------
 D. Busse, J. Erdman, R. J. Kerkman, D. Schlegel, G. Skibinski, "System electrical
