@@ -518,7 +518,7 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                                                  * r_extra.choice([-1.0, 1.0], size=(2, 1)))
                 arrays.update(u_B_DE=noisy_e[0].astype(np.float32),
                               i_CM=noisy_e[1].astype(np.float32))
-            np.savez_compressed(tmp / "recordings" / name, **arrays,  # type: ignore[arg-type]
+            np.savez_compressed(tmp / "recordings" / name, **arrays,
                                 fs=np.float64(d.fs_hz))
             toml += ["", "[[recording]]", f"speed_rpm = {float(s)}", f'file = "recordings/{name}"']
             recs[str(round(s))] = {
