@@ -25,6 +25,15 @@ project's own bench :mod:`benches.truth`), each drawn per seed:
 Everything is pure computation; :func:`write_bench` writes a dataset (CONTRACT section 2)
 plus ``truth.json`` with the equivalent quantities the grey-box model can be compared
 with (:func:`equivalents`).
+
+With ``extra=True`` (``make_independent_bench.py --extra-measurements``) it also writes the
+further measurements of CONTRACT section 2a, computed from the same circuit: the
+``Shaft-Frame`` impedance (NDE shaft end to frame, terminals open) at standstill and at
+every rotating speed, and the recording channels ``u_B_DE`` (drive-end shaft end ``SD`` to
+frame, through its own first-order probe) and ``i_CM`` (sum of the three phase currents
+entering the machine terminals, through a first-order current probe), with their own
+noise. Their random draws come from streams of their own, so the bench without the flag
+is unchanged byte for byte and the four paper channels are the same with it.
 """
 
 from __future__ import annotations
@@ -52,6 +61,10 @@ TOPOLOGY_PORTS: dict[str, tuple[str, str]] = {
 }
 INV = ("inv.U", "inv.V", "inv.W")
 SPEEDS = (0.0, 100.0, 200.0, 300.0, 400.0, 500.0)
+SHAFT_FRAME = ("SN", "0")
+"""Node pair of the ``Shaft-Frame`` topology (CONTRACT section 2a)."""
+EXTRA_OUTPUTS = ("SD", *(f"i(cab.{ph}.L2)" for ph in PHASES))
+"""Drive-end shaft end and the current of each cable's last series inductor."""
 
 
 def _ln(rng: np.random.Generator, nominal: float, sigma: float) -> float:
@@ -130,6 +143,15 @@ def draw(seed: int) -> Draw:
     n_freq = int(rng.choice([301, 401, 801]))
     f_min = float(rng.choice([1e3, 1e3, 2e3]))
     return Draw(seed, v, n_coils, asym, jw, fs, n_freq, f_min)
+
+
+def draw_extra(seed: int) -> dict[str, float]:
+    """Acquisition of the further channels of bench ``seed`` (a stream of its own)."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 1920]))
+    return {"probe_bw_B_DE": float(rng.uniform(22e6, 28e6)),
+            "skew_B_DE": float(rng.uniform(-0.5e-9, 0.5e-9)),
+            "probe_bw_I": float(rng.uniform(20e6, 40e6)),
+            "snr_i_cm_db": float(rng.uniform(25, 35))}
 
 
 # ------------------------------------------------------------------------- network
@@ -319,10 +341,28 @@ def _probe(f: ArrF, bw: float, order: int, skew: float = 0.0) -> ArrC:
     return np.asarray(h * np.exp(-2j * np.pi * f * skew), dtype=complex)
 
 
+def extra_response(net: Circuit, d: Draw, freq_hz: ArrF, h_terminals: ArrC) -> ArrC:
+    """``(n_f, 2, 3)`` from the unit inverter sources to ``u_B_DE = v(SD)`` and ``i_CM``.
+
+    ``net`` is :func:`with_cable` of the machine, ``h_terminals`` ``(n_f, 3, 3)`` its
+    response at the terminals U, V, W. The current entering the machine at terminal ``p``
+    is the current of the cable's last series inductor less the current of the cable's
+    end capacitance ``cab_C / 2`` at ``p`` (KCL at the terminal node); ``i_CM`` is the sum
+    over the three phases.
+    """
+    h = net.mna.response(freq_hz, INV, EXTRA_OUTPUTS, method="modal")
+    jw_c = 2j * np.pi * freq_hz[:, None] * (d.v["cab_C"] / 2)
+    i_cm = h[:, 1:4, :].sum(axis=1) - jw_c * h_terminals.sum(axis=1)
+    return np.stack([h[:, 0, :], i_cm], axis=1)
+
+
 def record(d: Draw, speed: float, rng: np.random.Generator, n_periods: int = 8,
-           n_pre: int = 4) -> tuple[ArrF, ArrF]:
+           n_pre: int = 4, extra: dict[str, float] | None = None) -> tuple[ArrF, ArrF]:
     """Noise-free probe outputs (4, n) of the last ``n_periods`` PWM periods of a run of
-    ``n_pre + n_periods`` jittered periods, and the noisy record."""
+    ``n_pre + n_periods`` jittered periods, and the first rising edges of phase U.
+
+    With ``extra`` (:func:`draw_extra`) two more rows: ``u_B_DE`` and ``i_CM``
+    (:func:`extra_response`), each through its probe."""
     fs = d.fs_hz
     n_all = round((n_pre + n_periods) * fs / 8e3)
     t_all = n_all / fs
@@ -339,6 +379,13 @@ def record(d: Draw, speed: float, rng: np.random.Generator, n_periods: int = 8,
     for k, ph in enumerate(PHASES):
         y[k] *= _probe(f, v[f"probe_bw_{ph}"], 2)
     y[3] *= _probe(f, v["probe_bw_B"], 1, v["skew_B"])
+    if extra is not None:
+        he = extra_response(net, d, f[band], h[:, :3, :])
+        ye = np.zeros((2, f.size), complex)
+        ye[:, band] = np.einsum("foi,if->of", he, x[:, band])
+        ye[0] *= _probe(f, extra["probe_bw_B_DE"], 1, extra["skew_B_DE"])
+        ye[1] *= _probe(f, extra["probe_bw_I"], 1)
+        y = np.concatenate([y, ye])
     clean = np.fft.irfft(y, n=n_all, axis=1)[:, n_all - round(n_periods * fs / 8e3):]
     return clean, edges[0][0]
 
@@ -402,12 +449,25 @@ def equivalents(d: Draw, speed: float) -> dict[str, float]:
     return out
 
 
+def _noisy_spectrum(z: ArrC, rel: float, rng: np.random.Generator) -> ArrC:
+    return z + rel * np.abs(z) * (rng.standard_normal(z.size)
+                                  + 1j * rng.standard_normal(z.size)) / np.sqrt(2)
+
+
+def shaft_frame_impedance(d: Draw, speed: float, freq_hz: ArrF) -> ArrC:
+    """Noise-free ``Shaft-Frame`` impedance of the machine at ``speed`` (terminals open)."""
+    return machine(d, speed).mna.response(freq_hz, [SHAFT_FRAME], [SHAFT_FRAME])[:, 0, 0]
+
+
 def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
-                n_periods: int = 8) -> dict[str, object]:
-    """Write bench ``seed`` as a dataset directory ``out`` (atomically)."""
+                n_periods: int = 8, extra: bool = False) -> dict[str, object]:
+    """Write bench ``seed`` as a dataset directory ``out`` (atomically); with ``extra`` the
+    further measurements of CONTRACT section 2a as well (see the module docstring)."""
     d = draw(seed)
     ss = np.random.SeedSequence([seed, 77])
     r_imp, r_pwm, r_noise = (np.random.default_rng(s) for s in ss.spawn(3))
+    ex = draw_extra(seed) if extra else None
+    r_extra = np.random.default_rng(np.random.SeedSequence([seed, 78]))
     with atomic_directory(out) as tmp:
         (tmp / "impedance").mkdir()
         (tmp / "recordings").mkdir()
@@ -420,15 +480,27 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
             z = z + d.v["z_noise"] * np.abs(z) * (r_imp.standard_normal(f.size) + 1j
                                                   * r_imp.standard_normal(f.size)) / np.sqrt(2)
             (tmp / "impedance" / f"{topo}.csv").write_text(csv_text(FrequencyData(f, z, kind="Z")))
-        clean = {s: record(d, s, r_pwm, n_periods)[0] for s in speeds}
+        at_speed: list[str] = []
+        if extra:
+            for s in (0.0, *(x for x in speeds if x > 0)):
+                z = _noisy_spectrum(shaft_frame_impedance(d, s, f), d.v["z_noise"], r_extra)
+                name = "Shaft-Frame.csv" if s == 0 else f"Shaft-Frame_{round(s):04d}rpm.csv"
+                (tmp / "impedance" / name).write_text(csv_text(FrequencyData(f, z, kind="Z")))
+                if s > 0:
+                    at_speed += ["", "[[impedance_at_speed]]", 'topology = "Shaft-Frame"',
+                                 f"speed_rpm = {float(s)}", f'file = "impedance/{name}"']
+        clean = {s: record(d, s, r_pwm, n_periods, extra=ex)[0] for s in speeds}
         b_rms = float(np.std(clean[min(speeds)][3])) / 10 ** (d.v["snr_b0_db"] / 20)
         toml = [f'name = "independent-bench-{seed}"',
                 'description = "independent virtual bench (benches/independent.py)"',
                 "temperature_c = 80.0", "", "[impedance]"]
         toml += [f'"{t}" = "impedance/{t}.csv"' for t in TOPOLOGY_PORTS]
+        if extra:
+            toml.append('"Shaft-Frame" = "impedance/Shaft-Frame.csv"')
+            i_rms = float(np.std(clean[min(speeds)][5])) / 10 ** (ex["snr_i_cm_db"] / 20)  # type: ignore[index]
         recs: dict[str, object] = {}
         for s in speeds:
-            y = clean[s]
+            y = clean[s][:4]
             n = y.shape[1]
             emi = _emi(d, n, r_noise)
             rms = np.r_[np.std(y[:3], axis=1) / 10 ** (d.v["snr_terminal_db"] / 20), b_rms]
@@ -436,9 +508,18 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                                          + 0.6 * emi[None, :]
                                          * r_noise.choice([-1.0, 1.0], size=(4, 1))))
             name = f"rpm{round(s):04d}.npz"
-            np.savez_compressed(tmp / "recordings" / name, u_U=noisy[0].astype(np.float32),
-                                u_V=noisy[1].astype(np.float32), u_W=noisy[2].astype(np.float32),
-                                u_B=noisy[3].astype(np.float32), fs=np.float64(d.fs_hz))
+            arrays = {"u_U": noisy[0].astype(np.float32), "u_V": noisy[1].astype(np.float32),
+                      "u_W": noisy[2].astype(np.float32), "u_B": noisy[3].astype(np.float32)}
+            if extra:
+                ye = clean[s][4:]
+                rms_e = np.array([b_rms, i_rms])
+                noisy_e = ye + rms_e[:, None] * (0.8 * r_extra.standard_normal(ye.shape)
+                                                 + 0.6 * emi[None, :]
+                                                 * r_extra.choice([-1.0, 1.0], size=(2, 1)))
+                arrays.update(u_B_DE=noisy_e[0].astype(np.float32),
+                              i_CM=noisy_e[1].astype(np.float32))
+            np.savez_compressed(tmp / "recordings" / name, **arrays,
+                                fs=np.float64(d.fs_hz))
             toml += ["", "[[recording]]", f"speed_rpm = {float(s)}", f'file = "recordings/{name}"']
             recs[str(round(s))] = {
                 "peak_u_b_clean_v": float(np.abs(brickwall_filter(y[3], d.fs_hz, 10e6)).max()),
@@ -448,11 +529,19 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                 "spectral_corr_periodogram_ceiling": spectral_corr_periodogram(
                     y[3], noisy[3].astype(np.float32), d.fs_hz),
                 "equivalents": equivalents(d, s)}
+            if extra:
+                recs[str(round(s))].update({  # type: ignore[attr-defined]
+                    "peak_u_b_de_clean_v": float(np.abs(brickwall_filter(
+                        clean[s][4], d.fs_hz, 10e6)).max()),
+                    "rms_i_cm_clean_a": float(np.std(clean[s][5]))})
+        toml += at_speed
         (tmp / "dataset.toml").write_text("\n".join(toml) + "\n")
         summary: dict[str, object] = {
             "seed": seed, "generator": "benches/independent.py", "values": d.v,
             "n_coils": d.n_coils, "fs_hz": d.fs_hz, "n_freq": d.n_freq,
             "bearing_noise_rms_v": b_rms, "recordings": recs,
             "equivalents": equivalents(d, 100.0)}
+        if extra:
+            summary.update(extra_measurements=ex, i_cm_noise_rms_a=i_rms)
         (tmp / "truth.json").write_text(json.dumps(summary, indent=1) + "\n")
     return summary

@@ -12,6 +12,11 @@ tests; the pipeline does not read it). Deterministic for a given seed and argume
 
 Unseen benches: ``--seed N --perturb 0.15`` (log-normal perturbation of every truth value)
 and ``--variant`` (effect set of the truth network, see BENCH_VARIANTS).
+
+``--extra-measurements`` adds the further measurements of CONTRACT section 2a
+(benches/drive_extra.py): the Shaft-Frame impedance at standstill and at each rotating
+speed, and the recording channels u_B_DE and i_CM, with noise from a random stream of
+their own; without the flag the bench is unchanged byte for byte.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
 
+from benches.drive_extra import extra_steady_state, shaft_frame_impedance
 from benches.noise import add_noise, make_emi, snr_db
 from benches.truth import (
     BENCH_VARIANTS,
@@ -61,6 +67,8 @@ def _args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--n-freq", type=int, default=401, help="impedance points")
     ap.add_argument("--z-noise", type=float, default=0.005, help="relative impedance noise")
     ap.add_argument("--name", default=None)
+    ap.add_argument("--extra-measurements", action="store_true",
+                    help="also write Shaft-Frame spectra and the u_B_DE, i_CM channels")
     return ap.parse_args(argv)
 
 
@@ -70,8 +78,10 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
                speeds: tuple[float, ...] = (0, 100, 200, 300, 400, 500), periods: int = 8,
                fs: float = 100e6, n_freq: int = 401, z_noise: float = 0.005,
                name: str | None = None, n_coils: int = 4,
-               n_rungs: int = 6) -> dict[str, object]:
-    """Write the dataset to ``out`` (replaced atomically); returns the calibration summary."""
+               n_rungs: int = 6, extra: bool = False) -> dict[str, object]:
+    """Write the dataset to ``out`` (replaced atomically); returns the calibration summary.
+
+    ``extra``: also the further measurements of CONTRACT section 2a (module docstring)."""
     effects = BENCH_VARIANTS[variant]
     ss = np.random.SeedSequence(seed)
     r_truth, r_detail, r_imp, r_noise = (np.random.default_rng(s) for s in ss.spawn(4))
@@ -79,6 +89,7 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
     det = truth_detail(r_detail, n_coils=n_coils, n_rungs=n_rungs)
     inv, cable = InverterSpec(), CableSpec()
     scope = ScopeSpec(fs_hz=fs, n_periods=periods)
+    r_extra = np.random.default_rng(np.random.SeedSequence([seed, 78]))
 
     with atomic_directory(out) as tmp:
         (tmp / "impedance").mkdir()
@@ -102,13 +113,28 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
                                  if "Frame" in topo else None,
                                  "z_min_ohm": float(np.abs(z).min()),
                                  "f_at_z_min_hz": float(f[np.argmin(np.abs(z))])}
+        at_speed: list[str] = []
         # ---- recordings: noise-free steady states first (bearing noise set at 0 rpm)
         clean = {}
+        clean_extra = {}
         for rpm in speeds:
             p, st = lubricant_at_speed(tp, rpm)
             net = build_truth_network(p, det, effects, st)
-            clean[rpm] = steady_state(net, inv, cable, scope, rpm,
-                                      mna=drive_circuit(net, cable).mna)
+            mna = drive_circuit(net, cable).mna
+            clean[rpm] = steady_state(net, inv, cable, scope, rpm, mna=mna)
+            if extra:
+                clean_extra[rpm] = extra_steady_state(net, inv, cable, scope, rpm, mna=mna)
+        if extra:
+            for rpm in (0.0, *(x for x in speeds if x > 0)):
+                p, st = lubricant_at_speed(tp, rpm)
+                z = shaft_frame_impedance(build_truth_network(p, det, effects, st), f) + fix
+                z = z + z_noise * np.abs(z) * (r_extra.standard_normal(f.size) + 1j
+                                               * r_extra.standard_normal(f.size)) / np.sqrt(2)
+                fname = "Shaft-Frame.csv" if rpm == 0 else f"Shaft-Frame_{round(rpm):04d}rpm.csv"
+                (tmp / "impedance" / fname).write_text(csv_text(FrequencyData(f, z, kind="Z")))
+                if rpm > 0:
+                    at_speed += ["", "[[impedance_at_speed]]", 'topology = "Shaft-Frame"',
+                                 f"speed_rpm = {float(rpm)}", f'file = "impedance/{fname}"']
         ref = clean[min(speeds)][3]
         bearing_rms = float(np.std(ref)) / 10 ** (scope.snr_bearing_db_standstill / 20)
         recs = {}
@@ -118,16 +144,26 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
                 'made by scripts/make_testbench.py"',
                 "temperature_c = 80.0", "", "[impedance]"]
         toml += [f'"{t}" = "impedance/{t}.csv"' for t in TOPOLOGY_PORTS]
+        if extra:
+            toml.append('"Shaft-Frame" = "impedance/Shaft-Frame.csv"')
+            # i_CM noise: 30 dB below the standstill record (a current probe on the cable)
+            i_rms = float(np.std(clean_extra[min(speeds)][1])) / 10 ** (30 / 20)
         for rpm in speeds:
             y = clean[rpm]
             rms = np.r_[np.std(y[:3], axis=1) / 10 ** (scope.snr_terminal_db / 20), bearing_rms]
             emi = make_emi(r_noise, inv, scope, rpm)
             noisy = add_noise(y, rms, emi, scope.emi_fraction, r_noise)
             fname = f"rpm{round(rpm):04d}.npz"
+            more = {}
+            if extra:
+                # same scope: the DE probe has the NDE probe's noise level and shares the EMI
+                ye = add_noise(clean_extra[rpm], np.array([bearing_rms, i_rms]), emi,
+                               scope.emi_fraction, r_extra)
+                more = {"u_B_DE": ye[0].astype(np.float32), "i_CM": ye[1].astype(np.float32)}
             np.savez_compressed(tmp / "recordings" / fname,
                                 u_U=noisy[0].astype(np.float32), u_V=noisy[1].astype(np.float32),
                                 u_W=noisy[2].astype(np.float32), u_B=noisy[3].astype(np.float32),
-                                fs=np.float64(fs))
+                                **more, fs=np.float64(fs))
             snr = snr_db(y, noisy)
             recs[str(round(rpm))] = {
                 "peak_terminal_v": float(np.abs(y[:3]).max()),
@@ -141,6 +177,12 @@ def make_bench(out: Path, seed: int = 0, variant: str = "paper", perturb: float 
             }
             toml += ["", "[[recording]]", f"speed_rpm = {float(rpm)}",
                      f'file = "recordings/{fname}"']
+            if extra:
+                recs[str(round(rpm))].update({  # type: ignore[attr-defined]
+                    "peak_u_b_de_clean_v": float(np.abs(brickwall_filter(
+                        clean_extra[rpm][0], fs, 10e6)).max()),
+                    "rms_i_cm_clean_a": float(np.std(clean_extra[rpm][1]))})
+        toml += at_speed
         (tmp / "dataset.toml").write_text("\n".join(toml) + "\n")
         summary = {
             "seed": seed, "variant": variant, "perturb": perturb,
@@ -165,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     speeds = tuple(float(s) for s in a.speeds.split(","))
     s = make_bench(out, a.seed, a.variant, a.perturb, speeds, a.periods, a.fs, a.n_freq,
-                   a.z_noise, a.name)
+                   a.z_noise, a.name, extra=a.extra_measurements)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     print(f"wrote {out} ({size / 1e6:.2f} MB)", file=sys.stderr)
     for rpm, r in s["recordings"].items():  # type: ignore[attr-defined]

@@ -27,7 +27,11 @@ DcMode = Literal["enforce", "fit"]
 PoleSpacing = Literal["log", "lin"]
 
 Topology = Literal["U-Frame", "V-Frame", "W-Frame", "U-V", "V-W", "W-U"]
-"""Impedance measurement topologies of CONTRACT section 2."""
+"""Impedance measurement topologies of CONTRACT section 2 (the reference paper's six)."""
+
+FurtherTopology = Literal["Shaft-Frame"]
+"""Further impedance topologies of CONTRACT section 2a: ``Shaft-Frame`` between the NDE
+shaft end and the frame with the terminals U, V, W open."""
 
 Effect = Literal[
     "winding_skin_effect",
@@ -48,6 +52,10 @@ BearingState = Literal["standstill", "rotating"]
 
 KINDS: tuple[str, ...] = get_args(Kind)
 TOPOLOGIES: tuple[str, ...] = get_args(Topology)
+"""The six paper topologies (what ``Dataset.impedance`` holds and the pipeline iterates)."""
+FURTHER_TOPOLOGIES: tuple[str, ...] = get_args(FurtherTopology)
+"""Topologies beyond the paper's (``Dataset.further_impedance``, ``impedance_at_speed``)."""
+ALL_TOPOLOGIES: tuple[str, ...] = TOPOLOGIES + FURTHER_TOPOLOGIES
 EFFECTS: tuple[str, ...] = get_args(Effect)
 
 

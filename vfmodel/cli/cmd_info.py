@@ -24,7 +24,12 @@ def info(dataset: Path, as_json: bool) -> None:
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.pipeline.summary import dataset_summary
 
-    summary = dataset_summary(read_dataset(dataset))
+    ds = read_dataset(dataset)
+    if ds.prior_overrides:  # names of grey-box parameters (exit 2 for an unknown one)
+        from vfmodel.greybox.priors import check_overrides
+
+        check_overrides(ds)
+    summary = dataset_summary(ds)
     if as_json:
         click.echo(json.dumps(finite_json(summary), indent=2, allow_nan=False))
         return
@@ -35,11 +40,14 @@ def info(dataset: Path, as_json: bool) -> None:
         click.echo(f"  temperature {summary['temperature_c']:g} degC")
     click.echo(f"impedance spectra: {len(summary['impedance'])}")
     for topo, s in summary["impedance"].items():
-        click.echo(
-            f"  {topo:8s} {s['n_points']:5d} points  {s['f_min_hz']:10.4g} - "
-            f"{s['f_max_hz']:10.4g} Hz   |Z| {s['z_min_ohm']:.4g} - {s['z_max_ohm']:.4g} ohm"
-            f"   noise ~{s['noise_pct']:.2g} %"
-        )
+        click.echo(_spectrum_line(topo, s))
+    if summary["further_impedance"] or summary["impedance_at_speed"]:
+        n = len(summary["further_impedance"]) + len(summary["impedance_at_speed"])
+        click.echo(f"further impedance spectra (CONTRACT 2a): {n}")
+        for topo, s in summary["further_impedance"].items():
+            click.echo(_spectrum_line(f"{topo} at standstill", s))
+        for s in summary["impedance_at_speed"]:
+            click.echo(_spectrum_line(f"{s['topology']} at {s['speed_rpm']:g} rpm", s))
     click.echo(f"recordings: {len(summary['recordings'])}")
     for r in summary["recordings"]:
         click.echo(
@@ -47,6 +55,26 @@ def info(dataset: Path, as_json: bool) -> None:
             f"  {r['duration_s'] * 1e3:.4g} ms  raw peak u_B {r['peak_u_B_v']:.3g} V"
             f"  SNR u_B ~{r['snr_u_B_db']:.3g} dB, terminals ~{r['snr_terminals_db']:.3g} dB"
         )
+        if r["extra_channels"]:
+            extra = []
+            if r["peak_u_B_DE_v"] is not None:
+                extra.append(f"u_B_DE (raw peak {r['peak_u_B_DE_v']:.3g} V)")
+            if r["rms_i_CM_a"] is not None:
+                extra.append(f"i_CM (rms {r['rms_i_CM_a']:.3g} A)")
+            click.echo(f"           further channels: {', '.join(extra)}")
+    for table in ("machine", "bearing"):
+        if summary[table]:
+            items = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+                              for k, v in summary[table].items())
+            click.echo(f"[{table}]: {items}")
+    for name, ov in summary["prior_overrides"].items():
+        click.echo(f"[priors] {name}: " + ", ".join(f"{k} {v:g}" for k, v in ov.items()))
+
+
+def _spectrum_line(label: str, s: dict[str, Any]) -> str:
+    return (f"  {label:8s} {s['n_points']:5d} points  {s['f_min_hz']:10.4g} - "
+            f"{s['f_max_hz']:10.4g} Hz   |Z| {s['z_min_ohm']:.4g} - {s['z_max_ohm']:.4g} ohm"
+            f"   noise ~{s['noise_pct']:.2g} %")
 
 
 def _info_file(path: Path, as_json: bool) -> None:

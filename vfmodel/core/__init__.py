@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     )
     from vfmodel.core.dataset import (
         Dataset,
+        SpeedImpedance,
     )
     from vfmodel.core.frequency_data import (
         FrequencyData,
@@ -46,6 +47,11 @@ if TYPE_CHECKING:
         read_spectrum,
         spectrum_format,
         write_spectrum,
+    )
+    from vfmodel.core.machine_info import (
+        BearingInfo,
+        MachineInfo,
+        PriorOverride,
     )
     from vfmodel.core.progress import (
         Progress,
@@ -69,6 +75,10 @@ _EXPORTS: dict[str, str] = {
     "StateSpace": "rational_model",
     "Recording": "recording",
     "Dataset": "dataset",
+    "SpeedImpedance": "dataset",
+    "MachineInfo": "machine_info",
+    "BearingInfo": "machine_info",
+    "PriorOverride": "machine_info",
     "read_spectrum": "io_spectrum",
     "write_spectrum": "io_spectrum",
     "spectrum_format": "io_spectrum",
@@ -90,11 +100,15 @@ _EXPORTS: dict[str, str] = {
 }
 
 __all__ = [
+    "BearingInfo",
     "Dataset",
     "FrequencyData",
+    "MachineInfo",
+    "PriorOverride",
     "Progress",
     "RationalModel",
     "Recording",
+    "SpeedImpedance",
     "StateSpace",
     "as_frequency_data",
     "atomic_directory",

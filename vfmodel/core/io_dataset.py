@@ -1,4 +1,10 @@
-"""Reading a dataset directory (``dataset.toml``, CONTRACT section 2)."""
+"""Reading a dataset directory (``dataset.toml``, CONTRACT sections 2 and 2a).
+
+Besides the paper's spectra and recordings, ``dataset.toml`` may name the further
+measurements of section 2a (``"Shaft-Frame"`` in ``[impedance]``, ``[[impedance_at_speed]]``
+entries) and hold the optional ``[machine]``, ``[bearing]`` and ``[priors]`` tables
+(:mod:`vfmodel.core.io_machine`; documented in docs/dataset-priors.md).
+"""
 
 from __future__ import annotations
 
@@ -7,15 +13,19 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from vfmodel._choices import TOPOLOGIES
-from vfmodel.core.dataset import Dataset
+from vfmodel._choices import ALL_TOPOLOGIES, TOPOLOGIES
+from vfmodel.core.dataset import Dataset, SpeedImpedance
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.io_machine import parse_bearing, parse_machine, parse_priors
 from vfmodel.core.io_recording import read_recording
 from vfmodel.core.io_spectrum import read_spectrum
 from vfmodel.core.text import read_text_file
 from vfmodel.errors import InputError
 
 RECORDING_KEYS = ("speed_rpm", "file")
+AT_SPEED_KEYS = ("topology", "speed_rpm", "file")
+TOP_KEYS = ("name", "description", "temperature_c", "impedance", "recording",
+            "impedance_at_speed", "machine", "bearing", "priors")
 
 
 def dataset_file(root: Path, rel: object, source: str, place: str,
@@ -79,32 +89,40 @@ def read_dataset(path: str | Path, load_recordings: bool = True,
     temp = _get(doc, "temperature_c", (int, float), src, required=False)
     if temp is not None:
         temp = _finite(temp, "temperature_c", src, None)
-    unknown = set(doc) - {"name", "description", "temperature_c", "impedance", "recording"}
+    unknown = set(doc) - set(TOP_KEYS)
     if unknown:
         raise InputError(
             f"unknown key {sorted(unknown)[0]!r}",
             source=src,
-            expected="name, description, temperature_c, [impedance], [[recording]]",
+            expected="name, description, temperature_c, [impedance], [[recording]], "
+                     "[[impedance_at_speed]], [machine], [bearing], [priors]",
         )
+    machine = parse_machine(doc, src)
+    bearing = parse_bearing(doc, src)
+    overrides = parse_priors(doc, src)
     imp_table = doc.get("impedance", {})
     if not isinstance(imp_table, dict):
         raise InputError("[impedance] must be a table", source=src)
     impedance: dict[str, FrequencyData] = {}
+    further: dict[str, FrequencyData] = {}
     for topo, rel in imp_table.items():
-        if topo not in TOPOLOGIES:
+        if topo not in ALL_TOPOLOGIES:
             raise InputError(
                 "unknown topology",
                 source=src,
                 place="[impedance]",
                 found=repr(topo),
-                expected=", ".join(TOPOLOGIES),
+                expected=", ".join(ALL_TOPOLOGIES),
             )
         if not isinstance(rel, str):
             raise InputError(
                 "impedance file must be a string path", source=src, place=f"[impedance] {topo}"
             )
-        impedance[topo] = _read_impedance(
+        # the paper's six apart from the further ones (section 2a): code that iterates
+        # over Dataset.impedance sees only the six
+        (impedance if topo in TOPOLOGIES else further)[topo] = _read_impedance(
             dataset_file(root, rel, src, f"[impedance] {topo}", allow_outside))
+    at_speed = _read_at_speed(doc, root, src, allow_outside)
     recs_raw = doc.get("recording", [])
     if not isinstance(recs_raw, list):
         raise InputError("recordings must be an array of tables [[recording]]", source=src)
@@ -134,7 +152,47 @@ def read_dataset(path: str | Path, load_recordings: bool = True,
         description=description,
         temperature_c=None if temp is None else float(temp),
         root=root,
+        further_impedance=further,
+        impedance_at_speed=at_speed,
+        machine=machine,
+        bearing=bearing,
+        prior_overrides=overrides,
     )
+
+
+def _read_at_speed(doc: dict[str, Any], root: Path, src: str,
+                   allow_outside: bool) -> tuple[SpeedImpedance, ...]:
+    """The ``[[impedance_at_speed]]`` entries (topology, speed_rpm > 0, file)."""
+    raw = doc.get("impedance_at_speed", [])
+    if not isinstance(raw, list):
+        raise InputError("impedance at speed must be an array of tables "
+                         "[[impedance_at_speed]]", source=src)
+    out: list[SpeedImpedance] = []
+    for k, entry in enumerate(raw):
+        place = f"[[impedance_at_speed]] #{k + 1}"
+        if not isinstance(entry, dict):
+            raise InputError("impedance_at_speed entry must be a table", source=src,
+                             place=place)
+        unknown_keys = sorted(set(entry) - set(AT_SPEED_KEYS))
+        if unknown_keys:
+            raise InputError(f"unknown key {unknown_keys[0]!r}", source=src, place=place,
+                             expected=", ".join(AT_SPEED_KEYS))
+        topo = _get(entry, "topology", str, src, place=place)
+        if topo not in ALL_TOPOLOGIES:
+            raise InputError("unknown topology", source=src, place=f"{place} topology",
+                             found=repr(topo), expected=", ".join(ALL_TOPOLOGIES))
+        speed = _finite(_get(entry, "speed_rpm", (int, float), src, place=place),
+                        "speed_rpm", src, place)
+        if not speed > 0:
+            raise InputError("speed_rpm of an impedance at speed must be > 0 (standstill "
+                             "spectra belong in [impedance])", source=src,
+                             place=f"{place} speed_rpm", found=f"{speed:g}")
+        if any(s.topology == topo and s.speed_rpm == speed for s in out):
+            raise InputError(f"two {topo} spectra at {speed:g} rpm", source=src, place=place)
+        rel = _get(entry, "file", str, src, place=place)
+        data = _read_impedance(dataset_file(root, rel, src, f"{place} file", allow_outside))
+        out.append(SpeedImpedance(topo, speed, data))
+    return tuple(sorted(out, key=lambda s: (s.topology, s.speed_rpm)))
 
 
 def _read_impedance(path: Path) -> FrequencyData:

@@ -1,5 +1,10 @@
 """Recording files: NPZ (arrays u_U, u_V, u_W, u_B and t or fs) and CSV
-(header ``time_s,u_U,u_V,u_W,u_B``), CONTRACT section 2."""
+(header ``time_s,u_U,u_V,u_W,u_B``), CONTRACT section 2.
+
+Either may carry the further channels of CONTRACT section 2a, ``u_B_DE`` and ``i_CM``
+(NPZ: arrays of those names; CSV: columns after ``u_B``, in any order); the recording then
+holds them after the four channels. Any other array or column is an error.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vfmodel.core.atomic import atomic_path, atomic_write_text
-from vfmodel.core.recording import BEARING, TERMINALS, Recording
+from vfmodel.core.recording import BEARING, EXTRA_CHANNELS, TERMINALS, Recording
 from vfmodel.core.text import read_text_file
 from vfmodel.errors import InputError
 
@@ -76,8 +81,8 @@ def read_recording(path: str | Path, speed_rpm: float | None = None) -> Recordin
 MAX_SAMPLES = 2**26
 """Longest recording accepted: 67 million samples per channel (checked from the array
 headers before anything is allocated)."""
-EXTRA_ARRAYS = ("u_B_DE", "i_CM")
-"""Further channels a recording may hold (CONTRACT section 2a); read but not yet used."""
+EXTRA_ARRAYS = EXTRA_CHANNELS
+"""Further channels a recording may hold (CONTRACT section 2a), carried after the four."""
 KNOWN_ARRAYS = (*CHANNELS, "t", "fs", *EXTRA_ARRAYS)
 
 
@@ -142,7 +147,8 @@ def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
             expected="u_U, u_V, u_W, u_B and t or fs",
         )
     chans: dict[str, NDArray[np.float64]] = {}
-    for c in CHANNELS:
+    names = (*CHANNELS, *(c for c in EXTRA_ARRAYS if c in arrays))
+    for c in names:
         a = arrays[c]
         if a.ndim != 1 or not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
             raise InputError(
@@ -184,7 +190,7 @@ def _read_npz(p: Path, speed_rpm: float | None) -> Recording:
         fs, t0 = fs_given, 0.0
     else:
         raise InputError("no time axis", source=src, expected="an array t or a scalar fs")
-    return Recording(fs, np.stack([chans[c] for c in CHANNELS]), CHANNELS, speed_rpm, t0, src)
+    return Recording(fs, np.stack([chans[c] for c in names]), names, speed_rpm, t0, src)
 
 
 def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
@@ -192,10 +198,13 @@ def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
     text = read_text_file(p, "recording CSV")
     first, _, rest = text.partition("\n")
     header = tuple(c.strip() for c in first.strip().split(","))
-    if header != CSV_HEADER:
+    extras = header[len(CSV_HEADER):]
+    if header[:len(CSV_HEADER)] != CSV_HEADER or len(set(extras)) != len(extras) \
+            or not set(extras) <= set(EXTRA_ARRAYS):
         raise InputError(
             "unknown recording CSV header", source=src, place="line 1",
-            found=first.strip()[:80], expected=",".join(CSV_HEADER),
+            found=first.strip()[:80],
+            expected=",".join(CSV_HEADER) + " then optionally " + " and ".join(EXTRA_ARRAYS),
         )
     if not rest.strip():
         raise InputError("recording CSV has no data rows", source=src)
@@ -205,12 +214,12 @@ def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
         raise InputError(f"unreadable data: {err}", source=src) from None
     if table.size == 0:
         raise InputError("recording CSV has no data rows", source=src)
-    if table.shape[1] != len(CSV_HEADER):
+    if table.shape[1] != len(header):
         raise InputError(
             "wrong number of columns", source=src, found=str(table.shape[1]),
-            expected=str(len(CSV_HEADER)),
+            expected=str(len(header)),
         )
-    for c, name in enumerate(CSV_HEADER):
+    for c, name in enumerate(header):
         bad = ~np.isfinite(table[:, c])
         if bad.any():
             raise InputError(
@@ -218,7 +227,9 @@ def _read_csv(p: Path, speed_rpm: float | None) -> Recording:
                 place=f"line {int(np.argmax(bad)) + 2}, column {name}", expected="finite numbers",
             )
     fs, t0 = _fs_from_time(table[:, 0], src)
-    return Recording(fs, table[:, 1:].T, CHANNELS, speed_rpm, t0, src)
+    # the four channels first, then the further ones in file order
+    names = (*CHANNELS, *extras)
+    return Recording(fs, table[:, 1:].T, names, speed_rpm, t0, src)
 
 
 def write_recording(path: str | Path, rec: Recording) -> None:
@@ -234,8 +245,9 @@ def write_recording(path: str | Path, rec: Recording) -> None:
         if missing:
             raise InputError("recording lacks channels for CSV", found=str(missing))
         buf = io.StringIO()
-        table = np.column_stack([rec.t, *(rec.channel(c) for c in CHANNELS)])
-        np.savetxt(buf, table, delimiter=",", header=",".join(CSV_HEADER), comments="",
+        cols = (*CHANNELS, *rec.extra_channels)
+        table = np.column_stack([rec.t, *(rec.channel(c) for c in cols)])
+        np.savetxt(buf, table, delimiter=",", header=",".join(("time_s", *cols)), comments="",
                    fmt="%.12g")
         atomic_write_text(p, buf.getvalue())
         return

@@ -1,4 +1,10 @@
-"""`Recording`: uniformly sampled channels of one oscilloscope record."""
+"""`Recording`: uniformly sampled channels of one oscilloscope record.
+
+The paper's four channels are ``u_U``, ``u_V``, ``u_W`` (terminal to frame) and ``u_B``
+(NDE shaft end to frame); a record may carry the further channels of CONTRACT section 2a,
+``u_B_DE`` (drive-end shaft end to frame, V) and ``i_CM`` (common-mode current, the sum of
+the three phase currents at the machine terminals, A), after them.
+"""
 
 from __future__ import annotations
 
@@ -14,6 +20,10 @@ MIN_SAMPLES = 64
 
 TERMINALS = ("u_U", "u_V", "u_W")
 BEARING = "u_B"
+BEARING_DE = "u_B_DE"
+COMMON_MODE_CURRENT = "i_CM"
+EXTRA_CHANNELS = (BEARING_DE, COMMON_MODE_CURRENT)
+"""Further channels of CONTRACT section 2a, in their file order."""
 
 
 @dataclass(frozen=True)
@@ -116,3 +126,23 @@ class Recording:
     def bearing(self) -> NDArray[np.float64]:
         """Bearing voltage u_B."""
         return self.channel(BEARING)
+
+    def has_channel(self, name: str) -> bool:
+        """Whether the record holds channel ``name``."""
+        return name in self.channels
+
+    @property
+    def extra_channels(self) -> tuple[str, ...]:
+        """The further channels of CONTRACT section 2a this record holds (file order)."""
+        return tuple(c for c in EXTRA_CHANNELS if c in self.channels)
+
+    @property
+    def bearing_de(self) -> NDArray[np.float64] | None:
+        """Drive-end bearing voltage ``u_B_DE`` (V), or None when not recorded."""
+        return self.channel(BEARING_DE) if BEARING_DE in self.channels else None
+
+    @property
+    def common_mode_current(self) -> NDArray[np.float64] | None:
+        """Common-mode current ``i_CM`` (A), or None when not recorded."""
+        return self.channel(COMMON_MODE_CURRENT) if COMMON_MODE_CURRENT in self.channels \
+            else None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from typing import Any
 
 import numpy as np
@@ -59,19 +60,27 @@ def coherence_snr_db(rec: Recording, f_max_hz: float = F_CUT_HZ) -> float:
     return float(10 * np.log10(sig / noi)) if noi > 0 else float("inf")
 
 
+def _spectrum_summary(d: FrequencyData) -> dict[str, Any]:
+    mag = np.abs(d.values[:, 0, 0])
+    return {
+        "n_points": d.n_freq,
+        "f_min_hz": float(d.freq_hz[0]),
+        "f_max_hz": float(d.freq_hz[-1]),
+        "z_min_ohm": float(mag.min()),
+        "z_max_ohm": float(mag.max()),
+        "noise_pct": spectrum_noise_pct(d),
+    }
+
+
 def dataset_summary(ds: Dataset) -> dict[str, Any]:
-    """Plain-dict summary: spectra ranges and noise, recordings' rates, durations, SNR."""
-    imp = {}
-    for topo, d in ds.impedance.items():
-        mag = np.abs(d.values[:, 0, 0])
-        imp[topo] = {
-            "n_points": d.n_freq,
-            "f_min_hz": float(d.freq_hz[0]),
-            "f_max_hz": float(d.freq_hz[-1]),
-            "z_min_ohm": float(mag.min()),
-            "z_max_ohm": float(mag.max()),
-            "noise_pct": spectrum_noise_pct(d),
-        }
+    """Plain-dict summary: spectra ranges and noise, recordings' rates, durations, SNR;
+    the further measurements of CONTRACT section 2a (standstill spectra of further
+    topologies, spectra at speed, further channels) and the given ``[machine]``,
+    ``[bearing]`` and ``[priors]`` entries."""
+    imp = {topo: _spectrum_summary(d) for topo, d in ds.impedance.items()}
+    further = {topo: _spectrum_summary(d) for topo, d in ds.further_impedance.items()}
+    at_speed = [{"topology": s.topology, "speed_rpm": s.speed_rpm,
+                 **_spectrum_summary(s.data)} for s in ds.impedance_at_speed]
     recs = []
     for r in ds.recordings:
         terms = [floor_snr_db(r.channel(c), r.fs) for c in ("u_U", "u_V", "u_W")]
@@ -85,6 +94,11 @@ def dataset_summary(ds: Dataset) -> dict[str, Any]:
                 "peak_u_B_v": float(np.max(np.abs(r.bearing))),
                 "snr_u_B_db": coherence_snr_db(r),
                 "snr_terminals_db": float(np.mean(terms)),
+                "extra_channels": list(r.extra_channels),
+                "peak_u_B_DE_v": None if r.bearing_de is None
+                else float(np.max(np.abs(r.bearing_de))),
+                "rms_i_CM_a": None if r.common_mode_current is None
+                else float(np.sqrt(np.mean(r.common_mode_current**2))),
             }
         )
     return {
@@ -93,5 +107,17 @@ def dataset_summary(ds: Dataset) -> dict[str, Any]:
         "description": ds.description,
         "temperature_c": ds.temperature_c,
         "impedance": imp,
+        "further_impedance": further,
+        "impedance_at_speed": at_speed,
         "recordings": recs,
+        "machine": _given(ds.machine),
+        "bearing": _given(ds.bearing),
+        "prior_overrides": {k: _given(v) for k, v in ds.prior_overrides.items()},
     }
+
+
+def _given(info: object) -> dict[str, Any] | None:
+    """The fields of a ``[machine]``/``[bearing]``/``[priors]`` entry that were given."""
+    if info is None:
+        return None
+    return {k: v for k, v in asdict(info).items() if v is not None}  # type: ignore[call-overload]
