@@ -153,6 +153,35 @@ def test_sections_keep_low_frequency_totals() -> None:
     assert np.max(np.abs(z4 - z2) / np.abs(z2)) < 2e-3
 
 
+def test_insulation_taper_moves_capacitance_along_the_winding() -> None:
+    from vfmodel.greybox.assembly import junction_weights
+
+    # the profile: shares summing to 1, first / last = taper, geometric in between
+    for taper, n in ((1.0, 4), (3.0, 5), (0.25, 2)):
+        w = junction_weights(taper, n)
+        assert w.sum() == pytest.approx(1.0, rel=1e-14)
+        assert w[0] / w[-1] == pytest.approx(taper, rel=1e-12)
+        assert np.allclose(w[1:] / w[:-1], w[1] / w[0], rtol=1e-12)
+    assert np.array_equal(junction_weights(7.0, 1), [1.0])
+    p3 = P0.with_values({"winding.U.C_taper": 3.0})
+    c = {e.name: e.value for e in build_network(p3, n_sections=4).elements}
+    w = junction_weights(3.0, 3)
+    for k in range(3):   # C_wf, C_wr and the leakage R_ins / w_k of each junction
+        assert c[f"insulation.wf.U.{k + 1}.C"] == pytest.approx(P0["winding.U.C_wf"] * w[k])
+        assert c[f"insulation.wr.U.{k + 1}.C"] == pytest.approx(P0["insulation.C_wr"] * w[k])
+        assert c[f"insulation.wf.U.{k + 1}.R"] == pytest.approx(P0["insulation.R_ins"] / w[k])
+    # two sections (one junction): no effect; the V and W phases keep equal shares
+    assert np.array_equal(build_network(p3).param_values, build_network(P0).param_values)
+    assert c["insulation.wf.V.1.C"] == pytest.approx(P0["winding.V.C_wf"] / 3)
+    # the totals stay: at 200 Hz (winding a short, the insulation in parallel) the CM
+    # impedance is unchanged; at 1 MHz the redistribution shows
+    pairs = [TOPOLOGY_PORTS["U-Frame"]]
+    z = [NetSpec(n_sections=4).build(q).port_impedance(np.array([200.0, 1e6]), pairs)
+         for q in (P0, p3)]
+    assert abs(z[1][0, 0, 0] / z[0][0, 0, 0] - 1) < 1e-4
+    assert abs(z[1][1, 0, 0] / z[0][1, 0, 0] - 1) > 1e-2
+
+
 def _spectra(params: object, spec: NetSpec, f: np.ndarray, noise: float,
              rng: np.random.Generator) -> dict[str, FrequencyData]:
     c = spec.build(params)  # type: ignore[arg-type]

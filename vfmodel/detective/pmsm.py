@@ -149,7 +149,9 @@ class PmsmFamily:
 
     def _free(self, eff: frozenset[str], params: ParamSet) -> tuple[str, ...]:
         spec = NetSpec(eff, self.n_rungs, self.n_sections)
-        names = list(machine_names(params, spec))
+        # the insulation taper stays uniform (1): the detective's candidate effects and
+        # their calibrated decisions were established without it
+        names = [n for n in machine_names(params, spec) if not n.endswith(".C_taper")]
         lub = lubricant_names(params, eff)
         if bearing_state(0.0, eff) == "rotating":     # no contact: the film is seen at rest
             names += [n for n in lub if n not in names]

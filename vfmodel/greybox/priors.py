@@ -263,6 +263,9 @@ def _physics(geo: Geometry, speed_rpm: float) -> dict[str, Prior]:
         ln(f"{w}.C_t", 100e-12, 3.0, "leads and terminal box to the housing (~1 m at "
            "~100 pF/m)")
         ln(f"{w}.C_wf", c_wf, 3.0, f"slot liner plate capacitor, {size}")
+        rg(f"{w}.C_taper", 0.2, 5.0, "line-end to neutral-end share of the insulation "
+           "capacitance: coils of unequal slot and end-winding length, reinforced line-end "
+           "insulation (a few times either way)")
     rg("winding.skin_l_frac", 0.01, 0.5, "internal share of the winding inductance")
     rg("winding.skin_rho", 1.5, 20.0, "RL-ladder ratio")
     rg("insulation.R_ins", 5e6, 1e13, "IEEE Std 43 minimum to clean modern insulation")
