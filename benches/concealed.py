@@ -48,6 +48,7 @@ from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import (
     BEARING_NODE,
     SOURCES,
+    TAPER_NAMES,
     TOPOLOGY_PORTS,
     default_params,
     lubricant_names,
@@ -260,7 +261,10 @@ def truth_values(case: ConcealedCase, seed: int = 0, unseen: bool = False,
                  config: BenchConfig = BenchConfig()) -> tuple[ParamSet, dict[str, float]]:
     """Truth parameters (100-rpm lubricant values) and the effect size actually used."""
     r_truth, r_size, _, _ = _rngs(case, seed, unseen)
-    p = default_params().perturbed(r_truth, config.perturb)
+    p0 = default_params()
+    # every parameter but the insulation tapers (the cases were drawn before they existed)
+    p = p0.perturbed(r_truth, config.perturb,
+                     [n for n in p0.names if n not in TAPER_NAMES])
     size = dict(case.size)
     if unseen:
         for k in sorted(size):

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState, check_choice
 from vfmodel.circuit.netlist import Circuit, Element
-from vfmodel.greybox.assembly import BEARING_NODE, PHASES, default_params
+from vfmodel.greybox.assembly import BEARING_NODE, PHASES, TAPER_NAMES, default_params
 from vfmodel.greybox.effects import ALL_EFFECTS, PAPER_EFFECTS, check_effects
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.substructures import (
@@ -120,7 +120,8 @@ def truth_params(rng: np.random.Generator | None = None, sigma_log: float = 0.0)
         vals[f"winding.{ph}.C_t"] = p[f"winding.{ph}.C_t"] * a**2
     p = p.with_values(vals)
     if rng is not None and sigma_log > 0:
-        p = p.perturbed(rng, sigma_log)
+        # every parameter but the insulation tapers (the benches were drawn before them)
+        p = p.perturbed(rng, sigma_log, [n for n in p.names if n not in TAPER_NAMES])
     return p
 
 

@@ -44,7 +44,7 @@ from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.errors import InputError
-from vfmodel.greybox.assembly import PHASES, default_params, lubricant_names
+from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
 from vfmodel.greybox.effects import (
     ALL_EFFECTS,
     EFFECT_LOCATIONS,
@@ -151,7 +151,7 @@ class PmsmFamily:
         spec = NetSpec(eff, self.n_rungs, self.n_sections)
         # the insulation taper stays uniform (1): the detective's candidate effects and
         # their calibrated decisions were established without it
-        names = [n for n in machine_names(params, spec) if not n.endswith(".C_taper")]
+        names = [n for n in machine_names(params, spec) if n not in TAPER_NAMES]
         lub = lubricant_names(params, eff)
         if bearing_state(0.0, eff) == "rotating":     # no contact: the film is seen at rest
             names += [n for n in lub if n not in names]

@@ -293,6 +293,11 @@ def _elements(params: ParamSet | Mapping[str, float], effects: Iterable[str],
     return els
 
 
+TAPER_NAMES = tuple(f"winding.{p}.C_taper" for p in PHASES)
+"""The insulation tapers (:func:`junction_weights`), added 2026-11-24: the committed
+virtual benches and concealed cases were drawn without them (their truth keeps 1)."""
+
+
 def junction_weights(taper: float, n_junctions: int) -> NDArray[np.float64]:
     """Shares of a phase's insulation capacitance at its ``n_junctions`` section junctions,
     from the terminal end to the neutral end: a geometric profile whose first and last
