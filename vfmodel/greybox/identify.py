@@ -441,13 +441,21 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         # the first two candidates are always fitted, the third often: all three side by
         # side (with two processes the third runs while the second does; a third not
         # needed costs CPU, not time), the one with most sections (the longest fit) handed
-        # out first; further ones one at a time
-        n_first = min(3, len(cands))
-        first = parallel_map(fit_sections, n_first, progress,
-                             [f"impedance, {n} sections" for n in cands[:n_first]], max_nfev,
-                             first=[int(np.argmax(cands[:n_first]))])
+        # out first; further ones two at a time (the second is kept only when the first
+        # still gained; each fit is independent of the others, so the choice is the same
+        # as fitting them one at a time)
+        def batch(ks: Sequence[int]) -> None:
+            got = parallel_map(lambda j, prog: fit_sections(ks[j], prog), len(ks), progress,
+                               [f"impedance, {cands[k]} sections" for k in ks], max_nfev,
+                               first=[len(ks) - 1])
+            fitted.update(zip(ks, got, strict=True))
+
+        fitted: dict[int, tuple[NetSpec, ParamSet, StageReport]] = {}
+        batch(range(min(3, len(cands))))
         for k in range(len(cands)):
-            sp, pn, rep = first[k] if k < n_first else fit_sections(k, progress)
+            if k not in fitted:
+                batch(range(k, min(k + 2, len(cands))))
+            sp, pn, rep = fitted[k]
             stages.append(rep)
             improved = best is None or rep.chi2_red < best[0] * (1 - min_gain)
             if best is None or rep.chi2_red < best[0]:
