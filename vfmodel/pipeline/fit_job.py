@@ -24,6 +24,7 @@ from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
+from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
@@ -95,7 +96,7 @@ def run_fit(
     target_error: float | None = None,
     delay: float | Literal["auto", "none"] = "none",
     dc: DcMode = "enforce",
-    enforce_iterations: int = 30,
+    enforce_iterations: int = ENFORCE_ITERATIONS,
     enforce_margin: float | None = None,
 ) -> FitJobResult:
     """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
