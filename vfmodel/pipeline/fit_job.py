@@ -28,6 +28,7 @@ from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
+from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
 from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
 
@@ -169,6 +170,10 @@ def run_fit(
             if retry and (first is None or fit_errors(first[0], data)[1] > bound):
                 first = _out_of_band_retry(data, first, fit_kw, enforce_iterations,
                                            margin, bound)
+            if retry and data.n_in <= _RELOCATE_PORTS and \
+                    (first is None or fit_errors(first[0], data)[1] > bound):
+                first = _relocation_retry(model, data, first, report, first_iter, margin,
+                                          bound)
             if first is None:
                 raise InputError(
                     f"passivity enforcement found no certificate: {failure}",
@@ -201,6 +206,11 @@ _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cos
 # the retry ran for more than 7 minutes (loaded); its measured gains were all on 1-2 ports
 _EXTRA_POLES_PORTS = 2
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
+# relocation against the enforced model out of band (fitting.passive_relocation): S models
+# of at most this many ports (each round is one enforcement), rounds at most
+_RELOCATE_PORTS = 3
+_RELOCATE_ROUNDS = 4
+_RELOCATE_WEIGHT = 0.1  # weight of the passive out-of-band targets relative to the data
 
 
 def enforce_margin_for(fit_error: float, floor: float) -> float:
@@ -239,6 +249,50 @@ def _extra_poles_retry(
                              >= fit_errors(first[0], data)[1]):
         return first
     return enforced, check, replace(report, order=enforced.n_poles)
+
+
+def _relocation_retry(
+    model: RationalModel,
+    data: FrequencyData,
+    first: tuple[RationalModel, PassivityReport, FitReport] | None,
+    report: FitReport,
+    max_iter: int,
+    margin: float,
+    bound: float,
+) -> tuple[RationalModel, PassivityReport, FitReport] | None:
+    """Relocate the poles against the enforced model out of band and enforce again
+    (:func:`vfmodel.fitting.passive_relocation.relocate_passive`); keep the passive model
+    closest to the data."""
+
+    def enforce(m: RationalModel) -> RationalModel | None:
+        if check_passivity(m).passive:
+            return m
+        try:
+            return enforce_passivity(m, data, max_iter=max_iter, margin=margin,
+                                     allow_active=True)[0]
+        except PassivityError:
+            return None
+
+    best = first
+    best_err = np.inf if first is None else fit_errors(first[0], data)[1]
+    # first targets: the best passive model so far (no enforcement of the fit, which can
+    # fail or take minutes), then (1-2 ports, or without such a model) the enforced fit
+    # itself (measured: Clarity_example 1.06x vs 1.47x, cpw 4.4x vs 2.6x)
+    starts: list[RationalModel | None] = [] if first is None else [first[0]]
+    if first is None or data.n_in <= _EXTRA_POLES_PORTS:
+        starts.append(None)
+    for start in starts:
+        found = relocate_passive(model, data, enforce, rounds=_RELOCATE_ROUNDS,
+                                 out_weight=_RELOCATE_WEIGHT, good_enough=bound,
+                                 initial=start)
+        if found is not None and found[1] < best_err:
+            check = check_passivity(found[0])
+            if check.passive:
+                best = (found[0], check, replace(report, order=found[0].n_poles))
+                best_err = found[1]
+        if best_err <= bound:
+            break
+    return best
 
 
 def _out_of_band_retry(
