@@ -8,6 +8,7 @@ import numpy as np
 from scipy.linalg import lapack as _lapack
 
 from vfmodel.fitting._vf_core import (
+    _DIRECT_COLUMNS,
     _EXACT_FIT,
     _GRAM_ERROR,
     _TINY,
@@ -45,7 +46,7 @@ def _thin_q(a: FloatArray) -> FloatArray:
     """Orthonormal basis Q (m, n) of the thin QR of ``a`` (m >= n), from LAPACK directly
     (numpy.linalg.qr's wrapper costs more than the factorisation at small sizes)."""
     n = a.shape[1]
-    if a.shape[0] < n or n == 0:
+    if a.shape[0] < n or n == 0 or n >= _DIRECT_COLUMNS:
         return np.asarray(np.linalg.qr(a)[0], dtype=float)
     qr_, tau, _, info = _lapack.dgeqrf(a)
     q, _, info_q = _lapack.dorgqr(qr_[:, :n], tau, max(1, 64 * n))

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 from numpy.typing import NDArray
 from scipy.linalg import lapack as _lapack
 
@@ -39,6 +40,10 @@ ComplexArray = NDArray[np.complex128]
 _TINY = 1e-300
 _EXACT_FIT = 1e-12  # weighted relative RMS error below which the data is matched exactly
 _GRAM_ERROR = 1e-4  # weighted error above which the Gram sigma rows are accurate enough
+# columns below which least squares call LAPACK directly (unblocked Householder QR, the
+# same rounding as numpy's and scipy's wrappers here; the blocked QR of numpy's and
+# scipy's OpenBLAS builds round differently, and the automatic order follows rounding)
+_DIRECT_COLUMNS = 128
 _RANK_TOL = 1e-13  # |R_jj| / max |R_ii| below which a scaled matrix is rank deficient
 
 
@@ -284,7 +289,7 @@ def _scaled_lstsq(a: FloatArray, b: FloatArray, ridge: float = 0.0) -> FloatArra
         mu = ridge * float(np.linalg.norm(b)) / np.sqrt(n_c)
         an = np.vstack([an, mu * np.eye(n_c)])
         b = np.concatenate([b, np.zeros((n_c, *b.shape[1:]))], axis=0)
-    if an.shape[0] >= n_c > 0:
+    if an.shape[0] >= n_c > 0 and n_c < _DIRECT_COLUMNS:
         qr_, tau, _, info = _lapack.dgeqrf(an)
         diag = np.abs(np.diagonal(qr_)[:n_c])
         if info == 0 and diag.min() > _RANK_TOL * diag.max():
@@ -297,6 +302,14 @@ def _scaled_lstsq(a: FloatArray, b: FloatArray, ridge: float = 0.0) -> FloatArra
             if info_q == 0 and info_t == 0:
                 out: FloatArray = (np.asarray(x, dtype=float).T / norms).T
                 return out
+    elif an.shape[0] >= n_c:
+        q_np, r_np = np.linalg.qr(an)
+        diag = np.abs(np.diag(r_np))
+        if diag.size == 0 or diag.min() > _RANK_TOL * diag.max():
+            x = np.asarray(sla.solve_triangular(r_np, q_np.T @ b, check_finite=False),
+                           dtype=float)
+            out = (x.T / norms).T
+            return out
     x = np.asarray(np.linalg.lstsq(an, b, rcond=None)[0], dtype=float)
     out = (x.T / norms).T
     return out
