@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 
 from vfmodel.cli.cmd_fit import fit
-from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.passivity import enforce_passivity
 from vfmodel.pipeline.fit_job import run_fit
 

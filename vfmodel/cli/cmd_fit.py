@@ -11,7 +11,7 @@ from vfmodel.cli._common import finite_json, out_option, progress_bar, quiet_opt
 from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
-from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 
 FIT_OUTPUTS = ("model.json", "fit.png", "report.html")
 """Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""

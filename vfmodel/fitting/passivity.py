@@ -38,8 +38,8 @@ from scipy.optimize import brentq, minimize_scalar
 from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, PassivityWarning
-from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting._hamiltonian import crossing_frequencies, scaled_model
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 
 if TYPE_CHECKING:  # pragma: no cover
     import skrf

@@ -24,9 +24,9 @@ from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
-from vfmodel.fitting._defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
