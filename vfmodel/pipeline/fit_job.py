@@ -216,7 +216,7 @@ _RELOCATE_PORTS = 3
 # ... and of at most this many residue unknowns (ports^2 x poles): a 3-port HFSS model of
 # 61 poles took ~8 s per program, i.e. minutes per round
 _RELOCATE_UNKNOWNS = 300
-_RELOCATE_ROUNDS = 4
+_RELOCATE_ROUNDS = 16
 _RELOCATE_WEIGHT = 0.1  # weight of the passive out-of-band targets relative to the data
 
 
