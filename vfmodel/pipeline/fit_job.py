@@ -295,7 +295,10 @@ def _relocation_retry(
         if found is not None and found[1] < best_err:
             check = check_passivity(found[0])
             if check.passive:
-                best = (found[0], check, replace(report, order=found[0].n_poles))
+                reason = (f"{report.order_reason}; for passivity the poles were relocated "
+                          f"against the enforced model out of band ({found[0].n_poles} poles)")
+                best = (found[0], check, replace(report, order=found[0].n_poles,
+                                                 order_reason=reason))
                 best_err = found[1]
         if best_err <= bound:
             break
