@@ -11,6 +11,7 @@ from vfmodel.cli._common import finite_json, out_option, progress_bar, quiet_opt
 from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 
 FIT_OUTPUTS = ("model.json", "fit.png", "report.html")
 """Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""
@@ -69,7 +70,8 @@ def _order(value: str) -> int | str:
               "the others.")
 @click.option("--passive", is_flag=True, help="Enforce passivity (certified by the "
               "Hamiltonian test and a sampling cross-check) with a convex program.")
-@click.option("--enforce-iterations", type=click.IntRange(min=1), default=60,
+@click.option("--enforce-iterations", type=click.IntRange(min=1),
+              default=ENFORCE_ITERATIONS,
               show_default=True, help="Convex programs of the passivity enforcement.")
 @click.option("--enforce-margin", type=click.FloatRange(min=0, max=0.1, min_open=True,
                                                         max_open=True),

@@ -5,8 +5,10 @@ the zeros of sigma as new poles, and the fixed-order iteration (notation and ref
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import lapack as _lapack
 
 from vfmodel.fitting._vf_core import (
+    _DIRECT_COLUMNS,
     _EXACT_FIT,
     _GRAM_ERROR,
     _TINY,
@@ -40,6 +42,19 @@ def _gram_rows(gram: FloatArray) -> FloatArray:
     return out
 
 
+def _thin_q(a: FloatArray) -> FloatArray:
+    """Orthonormal basis Q (m, n) of the thin QR of ``a`` (m >= n), from LAPACK directly
+    (numpy.linalg.qr's wrapper costs more than the factorisation at small sizes)."""
+    n = a.shape[1]
+    if a.shape[0] < n or n == 0 or n >= _DIRECT_COLUMNS:
+        return np.asarray(np.linalg.qr(a)[0], dtype=float)
+    qr_, tau, _, info = _lapack.dgeqrf(a)
+    q, _, info_q = _lapack.dorgqr(qr_[:, :n], tau, max(1, 64 * n))
+    if info != 0 or info_q != 0:
+        return np.asarray(np.linalg.qr(a)[0], dtype=float)
+    return np.ascontiguousarray(q, dtype=float)
+
+
 def _sigma_rows_common(
     prob: Problem, basis_c: ComplexArray, basis_s: ComplexArray, precise: bool
 ) -> FloatArray:
@@ -54,7 +69,7 @@ def _sigma_rows_common(
     k_f, m = prob.n_freq, prob.n_resp
     n1 = basis_s.shape[1]
     w = prob.w[:, 0]
-    q1, _ = np.linalg.qr(_realify(basis_c * w[:, None]))  # (2K, Nc)
+    q1 = _thin_q(_realify(basis_c * w[:, None]))  # (2K, Nc)
     prod = prob.wh[:, :, None] * basis_s[:, None, :]  # (K, M, N+1)
     a2 = np.empty((2 * k_f, m, n1))
     np.negative(prod.real, out=a2[:k_f])

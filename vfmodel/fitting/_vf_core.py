@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 from numpy.typing import NDArray
+from scipy.linalg import lapack as _lapack
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -39,6 +40,10 @@ ComplexArray = NDArray[np.complex128]
 _TINY = 1e-300
 _EXACT_FIT = 1e-12  # weighted relative RMS error below which the data is matched exactly
 _GRAM_ERROR = 1e-4  # weighted error above which the Gram sigma rows are accurate enough
+# columns below which least squares call LAPACK directly (unblocked Householder QR, the
+# same rounding as numpy's and scipy's wrappers here; the blocked QR of numpy's and
+# scipy's OpenBLAS builds round differently, and the automatic order follows rounding)
+_DIRECT_COLUMNS = 128
 _RANK_TOL = 1e-13  # |R_jj| / max |R_ii| below which a scaled matrix is rank deficient
 
 
@@ -271,20 +276,39 @@ def _scaled_lstsq(a: FloatArray, b: FloatArray, ridge: float = 0.0) -> FloatArra
     Householder QR and a triangular solve; the SVD solver (minimum-norm solution) only
     when the scaled matrix is numerically rank deficient. ``ridge`` > 0 appends the rows
     ``ridge * ||b||_F / sqrt(n_cols) * I`` (Tikhonov) to the scaled system.
+
+    The factorisation is called from LAPACK directly (geqrf, orgqr, trtrs: the routines
+    behind numpy.linalg.qr and scipy's solve_triangular, in the same order): their
+    wrappers cost more than the factorisation itself at the sizes of small fits.
     """
     norms = np.linalg.norm(a, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
     an = a / norms
-    if ridge > 0 and an.shape[1]:
-        mu = ridge * float(np.linalg.norm(b)) / np.sqrt(an.shape[1])
-        an = np.vstack([an, mu * np.eye(an.shape[1])])
-        b = np.concatenate([b, np.zeros((an.shape[1], *b.shape[1:]))], axis=0)
-    if an.shape[0] >= an.shape[1]:
-        q, r = np.linalg.qr(an)
-        diag = np.abs(np.diag(r))
+    n_c = an.shape[1]
+    if ridge > 0 and n_c:
+        mu = ridge * float(np.linalg.norm(b)) / np.sqrt(n_c)
+        an = np.vstack([an, mu * np.eye(n_c)])
+        b = np.concatenate([b, np.zeros((n_c, *b.shape[1:]))], axis=0)
+    if an.shape[0] >= n_c > 0 and n_c < _DIRECT_COLUMNS:
+        qr_, tau, _, info = _lapack.dgeqrf(an)
+        diag = np.abs(np.diagonal(qr_)[:n_c])
+        if info == 0 and diag.min() > _RANK_TOL * diag.max():
+            q, _, info_q = _lapack.dorgqr(qr_[:, :n_c], tau, max(1, 64 * n_c))
+            # C-ordered Q and R and the transposed triangular solve, as numpy and scipy
+            # lay them out (the same rounding: the automatic order follows it)
+            q = np.ascontiguousarray(q)
+            r = np.ascontiguousarray(np.triu(qr_[:n_c]))
+            x, info_t = _lapack.dtrtrs(r.T, q.T @ b, lower=1, trans=1)
+            if info_q == 0 and info_t == 0:
+                out: FloatArray = (np.asarray(x, dtype=float).T / norms).T
+                return out
+    elif an.shape[0] >= n_c:
+        q_np, r_np = np.linalg.qr(an)
+        diag = np.abs(np.diag(r_np))
         if diag.size == 0 or diag.min() > _RANK_TOL * diag.max():
-            x = np.asarray(sla.solve_triangular(r, q.T @ b, check_finite=False), dtype=float)
-            out: FloatArray = (x.T / norms).T
+            x = np.asarray(sla.solve_triangular(r_np, q_np.T @ b, check_finite=False),
+                           dtype=float)
+            out = (x.T / norms).T
             return out
     x = np.asarray(np.linalg.lstsq(an, b, rcond=None)[0], dtype=float)
     out = (x.T / norms).T

@@ -39,6 +39,7 @@ from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, PassivityWarning
 from vfmodel.fitting._hamiltonian import crossing_frequencies, scaled_model
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 
 if TYPE_CHECKING:  # pragma: no cover
     import skrf
@@ -422,7 +423,7 @@ def enforce_passivity(
     *,
     weighting: Literal["relative", "uniform"] = "relative",
     perturb_d: bool = True,
-    max_iter: int = 60,
+    max_iter: int = ENFORCE_ITERATIONS,
     margin: float = 1e-6,
     allow_active: bool = False,
 ) -> tuple[RationalModel, PassivityReport]:
