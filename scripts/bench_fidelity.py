@@ -12,7 +12,9 @@ box), and one table prints, per bench and speed, the paper's metrics: impedance 
 coherence, peak bearing-voltage error (0 rpm absolute, rotating relative), spectral
 correlation, the plateau error (bearing voltage below 200 kHz), the classical BVR model's
 peak and plateau errors, whether the grey box beats it, and whether the 95 % intervals of
-the bearing (divider) capacitance and of the winding-rotor capacitance cover the truth.
+the bearing (divider) capacitance and of the winding-rotor capacitance cover the truth
+(an interval wider than ``MAX_WIDTH`` = 100x says the data do not fix the value: it is
+printed as None and not counted; the summary gives the widths).
 The same settings for every bench (no per-bench tuning). ``--dataset`` adds datasets
 without a known truth (e.g. data/pmsm40kw): metrics only.
 """

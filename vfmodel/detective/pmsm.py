@@ -149,8 +149,8 @@ class PmsmFamily:
 
     def _free(self, eff: frozenset[str], params: ParamSet) -> tuple[str, ...]:
         spec = NetSpec(eff, self.n_rungs, self.n_sections)
-        # the insulation taper stays uniform (1): the detective's candidate effects and
-        # their calibrated decisions were established without it
+        # the insulation tapers are not refitted: they keep the values the identification
+        # found (the start); the candidates' decisions were calibrated without them
         names = [n for n in machine_names(params, spec) if n not in TAPER_NAMES]
         lub = lubricant_names(params, eff)
         if bearing_state(0.0, eff) == "rotating":     # no contact: the film is seen at rest
