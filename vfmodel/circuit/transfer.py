@@ -49,6 +49,7 @@ from vfmodel.circuit._solvers import (
     balance_pencil,
     finite_mask,
 )
+from vfmodel.circuit.lowrank import LowRankTransfer
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.errors import CircuitError
 
@@ -227,12 +228,29 @@ class TransferMemo:
     def __init__(self) -> None:
         self._key: bytes = b""
         self._value: ArrC | None = None
+        self.lowrank: LowRankTransfer | None = None
+        """Set by a fit that moves only a few elements (:mod:`vfmodel.circuit.lowrank`):
+        used for element values it applies to, on the frequencies it was made for."""
+
+    def entry(self) -> tuple[bytes, ArrC] | None:
+        """The memo's entry (key, value), e.g. to hand it from a worker process back."""
+        return None if self._value is None else (self._key, self._value)
+
+    def restore(self, entry: tuple[bytes, ArrC]) -> None:
+        """Take over an entry of :meth:`entry` (computed by another process)."""
+        self._key, self._value = entry
+        if self._value.flags.writeable:
+            self._value.setflags(write=False)
 
     def __call__(self, mna: MnaSystem, b: ArrF, cout: ArrF, values: ArrF,
                  freq_hz: ArrF) -> ArrC:
         key = np.ascontiguousarray(values, dtype=float).tobytes()
         if self._value is None or key != self._key:
-            value = transfer_on(mna, b, cout, values, freq_hz)
+            lr = self.lowrank
+            if lr is not None and lr.applies(np.asarray(values, dtype=float), freq_hz):
+                value = lr(np.asarray(values, dtype=float))
+            else:
+                value = transfer_on(mna, b, cout, values, freq_hz)
             value.setflags(write=False)        # shared with the next caller: read-only
             self._value, self._key = value, key
         return self._value

@@ -9,7 +9,8 @@ sequence, in the same order. Processes are used only where ``fork`` exists and t
 calling process runs no other thread (forking a process with threads can deadlock on a
 lock held by one of them); otherwise, and for one job, the calls run in sequence.
 ``VFMODEL_WORKERS`` (default: the usable cores, at most the number of jobs) sets the
-number of processes; ``1`` turns the processes off.
+number of processes; ``1`` turns the processes off. A job that calls ``parallel_map``
+itself runs those calls in sequence (the cores are taken by the outer jobs).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ __all__ = ["parallel_calls", "parallel_map", "workers"]
 T = TypeVar("T")
 
 _JOB: Callable[[int], Any] | None = None     # the job of the pool being run (inherited)
+_IN_WORKER = False                           # True in a worker process: no nested pools
 
 
 def workers(n_jobs: int) -> int:
@@ -37,13 +39,15 @@ def workers(n_jobs: int) -> int:
         cores = int(env) if env else len(os.sched_getaffinity(0))
     except (ValueError, AttributeError):
         cores = os.cpu_count() or 1
-    if n_jobs < 2 or cores < 2 or "fork" not in mp.get_all_start_methods() \
+    if n_jobs < 2 or cores < 2 or _IN_WORKER or "fork" not in mp.get_all_start_methods() \
             or threading.active_count() > 1 or mp.current_process().daemon:
         return 1
     return min(n_jobs, cores)
 
 
 def _run(k: int) -> Any:
+    global _IN_WORKER
+    _IN_WORKER = True       # the job's own parallel_map calls run in sequence here
     assert _JOB is not None
     return _JOB(k)
 

@@ -514,7 +514,11 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         rterm = record_term(prep[s], spec, cur, "rotating") if rotating_fit == "record" \
             else None
         starts = _lubricant_starts(cur, prep[s], eff)
-        fit_terms: list[tuple[Term, float]] = [(rterm if rterm is not None else bterm, 1.0)]
+        lterm: BearingTerm | RecordTerm = rterm if rterm is not None else bterm
+        # only the lubricant moves: its transfer as a low-rank update of this network
+        # (made here, before the starts are forked, so that they share it)
+        lterm.use_low_rank(cur, lub)
+        fit_terms: list[tuple[Term, float]] = [(lterm, 1.0)]
         fit_p, rep = _best_of(starts, fit_terms, lub, f"lubricant {s:g} rpm", max_nfev,
                               prior_sigma, progress)
         stages.append(rep)

@@ -32,6 +32,7 @@ import scipy.fft as sfft
 from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState, check_choice
+from vfmodel.circuit.lowrank import LowRankTransfer, low_rank_transfer
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.transfer import TransferMemo
 from vfmodel.core.frequency_data import FrequencyData
@@ -294,6 +295,18 @@ class RecordTransfer:
         v = values_of(params, self.spec, self.state, sources=True)
         return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
 
+    def use_low_rank(self, params: ParamSet, names: Sequence[str]) -> bool:
+        """Prepare the transfer for fits that move only ``names`` from ``params`` (the
+        lubricant of one speed): a low-rank update of the network at ``params``
+        (:mod:`vfmodel.circuit.lowrank`), used while the other elements keep their values.
+        False when the form cannot be made (nothing moves, or a mutual coupling does)."""
+        v = values_of(params, self.spec, self.state, sources=True)
+        dl = dlogv_dlogp(params, names, self.spec, self.state, sources=True)
+        self._memo.lowrank = low_rank_transfer(self.mna, self.b, self.cout, v,
+                                               self.prep.bins_hz, _used_elements(dl),
+                                               direct=False)
+        return self._memo.lowrank is not None
+
     def output(self, params: ParamSet) -> ArrF:
         """Modelled bearing voltage at the record rate (periodic steady state, filtered
         inputs)."""
@@ -379,7 +392,7 @@ class BearingTerm(RecordTransfer):
             return r, np.stack(cols, axis=1)
         grid = jacobian_grid(self.prep.bins_hz, _J_TOP * self.freq_hz[-1])
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, self.transfer_bins(params), lmap)
+                                grid, self.transfer_bins(params), lmap, self._memo.lowrank)
         dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
@@ -402,20 +415,35 @@ def jacobian_grid(bins_hz: ArrF, top_hz: float, n_log: int = _J_LOG_POINTS) -> A
 
 def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
                        prep: PreparedRecording, params: ParamSet, names: Sequence[str],
-                       grid: ArrF, h_bins: ArrC, lmap: LogMap | None = None) -> ArrF:
+                       grid: ArrF, h_bins: ArrC, lmap: LogMap | None = None,
+                       lowrank: LowRankTransfer | None = None) -> ArrF:
     """``d y_model / d log p`` (n_names, n_h1): the bearing transfer's derivatives by the
     adjoint method on ``grid`` (Hz), applied to the record's terminal spectra and resampled
     to the H1 rate (the periodic response of :func:`steady_output` is linear in the
     transfer). The relative sensitivity ``dH / H`` is interpolated linearly onto every
     record bin (DC: the lowest grid value) and multiplied by ``h_bins``, the transfer
     (n_bins, 1, 3) on every record bin: it varies slowly across the resonances that make
-    ``dH`` itself change sign between grid points."""
+    ``dH`` itself change sign between grid points.
+
+    ``lowrank``: when it applies to the values and its moving elements include every
+    element the parameters move, the transfer and its derivatives on the grid come from
+    it (the record bins nearest the grid points), not from sparse factorisations."""
     v = values_of(params, spec, state, sources=True)
     dl = (lmap.at(params) if lmap is not None
           else dlogv_dlogp(params, names, spec, state, sources=True))
     used = _used_elements(dl)
-    hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v,
-                                       params=[mna.param_names[e] for e in used])
+    pos = None if lowrank is None else np.searchsorted(lowrank.moving, used)
+    if lowrank is not None and pos is not None and lowrank.applies(v, prep.bins_hz) \
+            and np.all(pos < lowrank.moving.size) \
+            and np.array_equal(lowrank.moving[np.minimum(pos, lowrank.moving.size - 1)], used):
+        k = np.unique(np.rint(np.interp(grid, prep.bins_hz,
+                                        np.arange(prep.bins_hz.size))).astype(np.intp))
+        grid = prep.bins_hz[k]
+        hg, dh = lowrank.with_derivatives(v, k)
+        dh = dh[..., pos]
+    else:
+        hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v,
+                                           params=[mna.param_names[e] for e in used])
     dhx = _chain(dh[:, 0, :, :], v[used], dl[used]).transpose(2, 1, 0)    # (n_p, 3, n_g)
     fb = prep.bins_hz
     fi = np.interp(fb, grid, np.arange(grid.size))

@@ -116,7 +116,8 @@ class RecordTerm(RecordTransfer):
             return r, np.zeros((r.size, 0))
         grid = jacobian_grid(self.prep.bins_hz, float(self.prep.bins_hz[-1]))
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, self.transfer_bins(params), lmap)[:, self.window]
+                                grid, self.transfer_bins(params), lmap,
+                                self._memo.lowrank)[:, self.window]
         jm = self._project(dy) / self.sigma
         return r, np.ascontiguousarray(jm.T)
 
