@@ -269,7 +269,13 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         # the held-out points are independent refits: side by side where possible
         job = partial(_round_job, family=family, base=cur, cands=tuple(remaining),
                       max_nfev=max_nfev, heldout_nfev=h_nfev, stage=stage)
-        out = parallel_map(job, len(remaining) + 1, progress, [stage], len(remaining))
+        if len(remaining) > 1:
+            out = parallel_map(job, len(remaining) + 1, progress, [stage], len(remaining))
+        else:
+            # one candidate: its long refit beside the short even-point fit would leave a
+            # core idle; in sequence here, each evaluation's terms run side by side instead
+            # (a family's own parallel evaluation, e.g. PmsmFamily._residual)
+            out = [job(k, progress) for k in range(2)]
         progress(stage, len(remaining), len(remaining))
         base_even = out[0]
         assert isinstance(base_even, FitResult)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +41,7 @@ from vfmodel._choices import BearingState
 from vfmodel.circuit.poles import network_poles
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
@@ -217,14 +219,66 @@ class PmsmFamily:
 
     def _residual(self, applied: Sequence[Candidate], params: ParamSet,
                   names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
+        imp, bts = self._terms(applied, params)
+        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        part = partial(self._part, applied, params, names)
+        if names is not None:
+            for k in jobs:               # log maps made here, inherited by the workers
+                self._part_names(applied, params, names, k)
+        # the record transfers (eigenvalues, ~50 ms each) and Jacobians (adjoint solves on
+        # ~350 frequencies, ~0.1 s each) dominate an evaluation: one job per term, side by
+        # side in forked workers; a worker's transfer comes back to the term's memo here,
+        # where the Jacobian at the same point (or a figure) asks for it again
+        parts = parallel_map(lambda i, _prog: part(jobs[i]), len(jobs))
+        for k, pr in zip(jobs, parts, strict=True):
+            if k >= 0 and pr[2] is not None:
+                bts[k]._memo.restore(pr[2])
+        rs = [r for pr in parts for r in pr[0]]
+        if names is None:
+            return np.concatenate(rs), None
+        js = [j for pr in parts for j in pr[1]]
+        return np.concatenate(rs), np.concatenate(js)
+
+    def _part_names(self, applied: Sequence[Candidate], params: ParamSet,
+                    names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
+        """Local parameter names of term ``k`` (-1: the impedances) and their columns;
+        builds the term's log map."""
+        loc: list[str] = []
+        cols: list[int] = []
+        if k < 0:
+            for j, n in enumerate(names):
+                if "@" not in n:
+                    loc.append(n)
+                    cols.append(j)
+            if loc:
+                self._lmap(applied, params, loc)
+            return loc, cols
+        p = self.preps[k]
+        tag = speed_tag(p.speed_rpm)
+        for j, n in enumerate(names):
+            if "@" not in n:
+                loc.append(n)
+                cols.append(j)
+            elif n.endswith(tag):
+                loc.append(n[: -len(tag)])
+                cols.append(j)
+        if loc:
+            self._lmap(applied, self.at_speed(params, p.speed_rpm), loc)
+        return loc, cols
+
+    def _part(self, applied: Sequence[Candidate], params: ParamSet,
+              names: tuple[str, ...] | None, k: int
+              ) -> tuple[list[ArrF], list[ArrF], tuple[bytes, ArrC] | None]:
+        """Residual channels (and Jacobian blocks) of term ``k`` (-1: the impedances), and
+        the record term's memo entry (None for the impedances)."""
         jac = names is not None
         nn = names or ()
-        col = {n: j for j, n in enumerate(nn)}
         imp, bts = self._terms(applied, params)
         rs: list[ArrF] = []
         js: list[ArrF] = []
-        if imp is not None:
-            loc = [n for n in nn if "@" not in n]
+        if k < 0:
+            assert imp is not None
+            loc, cols = self._part_names(applied, params, nn, k) if jac else ([], [])
             nt = len(self.topologies)
             nf = imp.freq_hz.size
             if loc:
@@ -236,40 +290,32 @@ class PmsmFamily:
             scale = imp.sigma / self.imp_sigma                      # term sigma -> detective
             rr = r.reshape(2, nf, nt) * scale
             jj = jm.reshape(2, nf, nt, len(loc)) * scale[None, None, :, None]
-            cols = [col[n] for n in loc]
             for t in range(nt):
                 rs.append(rr[:, :, t].ravel())
                 if jac:
                     full = np.zeros((2 * nf, len(nn)))
                     full[:, cols] = jj[:, :, t, :].reshape(2 * nf, len(loc))
                     js.append(full)
-        for bt, p in zip(bts, self.preps, strict=True):
-            tag = speed_tag(p.speed_rpm)
-            loc, cols = [], []
-            for n in nn:
-                if "@" not in n:
-                    loc.append(n)
-                    cols.append(col[n])
-                elif n.endswith(tag):
-                    loc.append(n[: -len(tag)])
-                    cols.append(col[n])
-            ps = self.at_speed(params, p.speed_rpm)
-            if jac and loc:
-                r, jm = bt.residual(ps, loc, jac=True, lmap=self._lmap(applied, ps, loc))
-                assert jm is not None
-            else:
-                r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
-            # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
-            nfm = bt.h_meas.shape[0]
-            rr = r.reshape(2, nfm, 3)
-            jj = jm.reshape(2, nfm, 3, len(loc))
-            for i in range(3):
-                rs.append(rr[:, :, i].ravel())
-                if jac:
-                    full = np.zeros((2 * nfm, len(nn)))
-                    full[:, cols] = jj[:, :, i, :].reshape(2 * nfm, len(loc))
-                    js.append(full)
-        return np.concatenate(rs), (np.concatenate(js) if jac else None)
+            return rs, js, None
+        bt, p = bts[k], self.preps[k]
+        ps = self.at_speed(params, p.speed_rpm)
+        loc, cols = self._part_names(applied, params, nn, k) if jac else ([], [])
+        if jac and loc:
+            r, jm = bt.residual(ps, loc, jac=True, lmap=self._lmap(applied, ps, loc))
+            assert jm is not None
+        else:
+            r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
+        # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
+        nfm = bt.h_meas.shape[0]
+        rr = r.reshape(2, nfm, 3)
+        jj = jm.reshape(2, nfm, 3, len(loc))
+        for i in range(3):
+            rs.append(rr[:, :, i].ravel())
+            if jac:
+                full = np.zeros((2 * nfm, len(nn)))
+                full[:, cols] = jj[:, :, i, :].reshape(2 * nfm, len(loc))
+                js.append(full)
+        return rs, js, bt._memo.entry()
 
     def poles(self, applied: Sequence[Candidate], params: ParamSet) -> ArrC:
         spec = self.spec(applied)
