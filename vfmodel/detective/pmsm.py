@@ -276,6 +276,11 @@ class PmsmFamily:
         return network_poles(spec.build(params, bearing_state(0.0, spec.effects)))
 
     # ------------------------------------------------------------------ extras
+    def bearing_terms(self) -> tuple[BearingTerm, ...]:
+        """Bearing terms of the starting structure, one per recording (measured H1, its
+        frequency grid and whitening; :mod:`vfmodel.detective.recommend` uses them)."""
+        return self._terms((), self.start)[1]
+
     def outputs(self, applied: Sequence[Candidate], params: ParamSet) -> list[ArrF]:
         """Modelled bearing voltage (periodic steady state) of every recording."""
         _, bts = self._terms(applied, params)
