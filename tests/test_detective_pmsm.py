@@ -75,6 +75,22 @@ def test_null_case_is_clean(null: DiagnoseResult) -> None:
     assert 0.8 <= null.document["start"]["chi2_red"] <= 1.2
 
 
+def test_null_identifiability_and_recommendations(null: DiagnoseResult) -> None:
+    """Every free parameter of the final network is classified; the one candidate of the
+    paper's network, the fixture inductance, acts only on the six measured spectra, so no
+    further measurement separates it (0 up to rounding, by construction)."""
+    doc = json.loads(json.dumps(null.document, allow_nan=False))
+    ident = doc["identifiability"]
+    assert set(ident["parameters"]) == set(null.diagnosis.final.names)
+    assert set(ident["parameters"].values()) <= {"identifiable", "prior-only",
+                                                 "not-identifiable"}
+    assert ident["effects"]["fixture_inductance"] != "identifiable"
+    recs = [r for r in doc["recommendations"] if r["separates"] == ["fixture_inductance"]]
+    assert {r["measurement"] for r in recs} >= {"impedance:Shaft-Frame", "channel:u_B_DE",
+                                                "channel:i_CM"}
+    assert all(r["expected_delta_chi2"] < 1e-9 and not r["decisive"] for r in recs)
+
+
 def test_null_residual_points_are_uncorrelated(null: DiagnoseResult) -> None:
     """The band statistics assume independent residual points: on the null case the
     pooled lag-1 autocorrelation of the final residual, per kind of channel, must be 0
