@@ -135,3 +135,11 @@ def test_recommendation_that_separates_by_construction_ranks_first() -> None:
     assert recs[1].expected_delta_chi2 < 1e-12 and not recs[1].decisive   # rounding only
     # a measurement the dataset holds is not recommended
     assert recommend(fam, cmps, have={("impedance:Shaft-Frame", 0.0)}) == []
+
+
+def test_a_refit_worse_than_the_network_without_is_not_assessed() -> None:
+    """Nested networks: Delta chi2 > 0 beyond k means the refit stopped short."""
+    cand = Candidate("winding_skin_effect", "R1",
+                     (ParamSpec("b", 1.0, 1e-3, 1e3, "effect", "", ""),))
+    e = effect_identifiability(cand, _fit(("a", "b"), 1.0), _J, +35.0)
+    assert e.status == "not-identifiable" and "worse" in e.reason

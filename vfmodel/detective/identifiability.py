@@ -41,6 +41,11 @@ Classification of an effect (a candidate tried, or a finding), from the refit th
 - ``prior-only`` when its new parameters are determined only with their prior;
 - ``identifiable`` when the data alone determine them (and no alternative is as good).
 
+A trial whose ``Delta chi2`` is positive beyond ``k`` (the network with the effect contains
+the one without, so its optimum cannot be worse) stopped short of its optimum: the
+effect is then ``not-identifiable`` with that reason, as the local curvature of such a
+point says nothing about the effect.
+
 An effect without parameters of its own (``metallic_contact``, a switch of the bearing
 state) is ``identifiable`` when ``|Delta chi2| >= 1`` and no alternative is as good, else
 ``not-identifiable``.
@@ -223,6 +228,11 @@ def effect_identifiability(cand: Candidate, fit: FitResult, jac: ArrF, delta_chi
         return EffectIdentifiability(
             cand.effect, cand.location, "not-identifiable", sd, sp, delta_chi2, k,
             "explained about as well by " + ", ".join(alternatives) + f" ({dc})", und)
+    if delta_chi2 > max(k, 1):   # nested networks: the refit stopped short of its optimum
+        return EffectIdentifiability(
+            cand.effect, cand.location, "not-identifiable", sd, sp, delta_chi2, k,
+            f"its refit ended worse than the network without it ({dc}): the curvature of "
+            "a point short of the optimum says nothing about the effect", und)
     if k == 0 and not seen:   # a switch without parameters that the data do not see
         return EffectIdentifiability(cand.effect, cand.location, "not-identifiable", sd, sp,
                                      delta_chi2, k, f"the data do not see it ({dc})", und)
@@ -232,6 +242,8 @@ def effect_identifiability(cand: Candidate, fit: FitResult, jac: ArrF, delta_chi
     elif status == "prior-only":
         why = (f"its parameters are determined only with their physical prior (std of ln p "
                f"{sds} from the data, {sps} with the prior; {dc})")
+    elif not any((prior_sigma or {}).get(n) for n in new):
+        why = f"its parameters are not determined (std of ln p {sds}, no prior; {dc})"
     else:
         why = (f"its parameters are not determined even with their prior (std of ln p "
                f"{sds} from the data, {sps} with the prior; {dc})")
