@@ -143,3 +143,26 @@ def test_a_refit_worse_than_the_network_without_is_not_assessed() -> None:
                      (ParamSpec("b", 1.0, 1e-3, 1e3, "effect", "", ""),))
     e = effect_identifiability(cand, _fit(("a", "b"), 1.0), _J, +35.0)
     assert e.status == "not-identifiable" and "worse" in e.reason
+
+
+def test_shaft_frame_sensitivity_matches_differences_and_spread_is_the_quadratic_form() -> None:
+    """``d ln Z_SF / d ln p`` (adjoint) against central differences of the impedance, and
+    the network spread of one parameter of variance c: ``c sum |g|^2 / sigma^2``."""
+    from vfmodel.detective.recommend import _dlnz_dlnp, _shaft_frame, network_spread
+
+    f = np.geomspace(1e3, 1e7, 21)
+    fam = _Stub((Channel("impedance:U-Frame", f, np.ones(21, complex), np.full(21, 0.005)),))
+    p = default_params()
+    names = ("lubricant.C_1", "ball.R_dc", "airgap.C_rf")
+    g = _dlnz_dlnp(fam, Net((), p), names, 0.0, f)
+    h = 1e-3    # central differences: error h^2 ~ 1e-6 of the largest value (a smaller
+    for j, n in enumerate(names):   # step meets the solver's rounding, 5e-6 at 1e-5)
+        zp = _shaft_frame(fam, Net((), p.with_values({n: p[n] * math.exp(h)})), 0.0, f)
+        zm = _shaft_frame(fam, Net((), p.with_values({n: p[n] * math.exp(-h)})), 0.0, f)
+        fd = np.log(zp / zm) / (2 * h)
+        np.testing.assert_allclose(g[:, j], fd, rtol=0, atol=1e-5 * float(np.max(np.abs(fd))))
+    cov = np.diag([0.04, 0.0, 0.0])
+    s = network_spread(fam, Net((), p), names, cov, 0.0, f, 0.005)
+    assert math.isclose(s, 0.04 * float(np.sum(np.abs(g[:, 0]) ** 2)) / 0.005**2, rel_tol=1e-10)
+    assert math.isinf(network_spread(fam, Net((), p), names, np.diag([np.inf, 0, 0]), 0.0,
+                                     f, 0.005))

@@ -85,6 +85,7 @@ __all__ = [
     "assess",
     "classify",
     "effect_identifiability",
+    "fisher_cov",
     "fisher_std",
     "grey_box_prior_sigma",
     "grey_box_priors",
@@ -106,10 +107,16 @@ def fisher_std(jac: ArrF, prior_sigma: Sequence[float | None] | None = None) -> 
     """Marginal standard deviation of each ``x_i = ln p_i`` from ``J^T J`` of the whitened
     residual, plus ``1 / s_i^2`` on the diagonal for every finite ``prior_sigma[i]``
     (``None``: no prior). Unseen directions give ``inf``."""
+    return np.sqrt(np.maximum(np.diag(fisher_cov(jac, prior_sigma)), 0.0))
+
+
+def fisher_cov(jac: ArrF, prior_sigma: Sequence[float | None] | None = None) -> ArrF:
+    """Covariance of ``x = ln p`` of :func:`fisher_std` (``inf`` on the diagonal of an
+    unseen direction)."""
     j = np.asarray(jac, dtype=float)
     k = j.shape[1]
     if k == 0:
-        return np.zeros(0)
+        return np.zeros((0, 0))
     rows = []
     if prior_sigma is not None:
         for i, s in enumerate(prior_sigma):
@@ -118,8 +125,7 @@ def fisher_std(jac: ArrF, prior_sigma: Sequence[float | None] | None = None) -> 
                 e[i] = 1.0 / s
                 rows.append(e)
     a = np.vstack([j, *rows]) if rows else j
-    cov = log_covariance(a, rcond=1e-12)
-    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return log_covariance(a, rcond=1e-12)
 
 
 def classify(std_data: float, std_post: float,
@@ -162,6 +168,7 @@ class Identifiability:
     std_post: ArrF
     prior_sigma: tuple[float | None, ...]
     status: tuple[Status, ...]
+    cov_post: ArrF | None = None
 
     def as_dict(self) -> dict[str, Status]:
         return dict(zip(self.names, self.status, strict=True))
@@ -173,9 +180,10 @@ def identifiability(jac: ArrF, names: Sequence[str],
     """Classify the parameters ``names`` (columns of ``jac``) (module docstring)."""
     ps: tuple[float | None, ...] = tuple((prior_sigma or {}).get(n) for n in names)
     sd = fisher_std(jac)
-    sp = fisher_std(jac, ps)
+    cp = fisher_cov(jac, ps)
+    sp = np.sqrt(np.maximum(np.diag(cp), 0.0))
     st = tuple(classify(float(a), float(b), threshold) for a, b in zip(sd, sp, strict=True))
-    return Identifiability(tuple(names), sd, sp, ps, st)
+    return Identifiability(tuple(names), sd, sp, ps, st, cp)
 
 
 @dataclass(frozen=True)
@@ -237,7 +245,9 @@ def effect_identifiability(cand: Candidate, fit: FitResult, jac: ArrF, delta_chi
         return EffectIdentifiability(cand.effect, cand.location, "not-identifiable", sd, sp,
                                      delta_chi2, k, f"the data do not see it ({dc})", und)
     status = classify(sd, sp, threshold)
-    if status == "identifiable":
+    if k == 0:
+        why = f"a switch without parameters of its own that the data see ({dc})"
+    elif status == "identifiable":
         why = f"the data determine its parameters (largest std of ln p {sds}; {dc})"
     elif status == "prior-only":
         why = (f"its parameters are determined only with their physical prior (std of ln p "

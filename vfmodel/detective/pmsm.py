@@ -248,6 +248,10 @@ class PmsmFamily:
             loc, cols = [], []
             for n in nn:
                 if "@" not in n:
+                    # a base (standstill) lubricant value is replaced by its copy at this
+                    # speed (at_speed): it does not act here
+                    if p.speed_rpm > 0 and n + tag in params:
+                        continue
                     loc.append(n)
                     cols.append(col[n])
                 elif n.endswith(tag):

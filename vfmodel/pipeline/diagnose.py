@@ -160,8 +160,10 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
     a = assess(family, d, {n: p.sigma for n, p in priors.items()})
     status = {k: v.status for k, v in a.effects.items()}
     und = {k: v.undetermined for k, v in a.effects.items()}
+    cov = a.parameters.cov_post
     recs = recommend(family, comparisons(d, status, und, priors),
-                     have=_have(dataset) if dataset is not None else ())
+                     have=_have(dataset) if dataset is not None else (),
+                     network=(d.final, cov) if cov is not None else None)
     return {"identifiability": a.as_json(),
             "recommendations": [r.as_json() for r in recs],
             "recommendations_definition": (
@@ -175,6 +177,9 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "median (data_delta_chi2_at_prior: what that size costs on the data "
                 "already measured); each effect keeps its most separating speed per "
                 "measurement; decisive: above 10 + k ln m (the detective's acceptance); "
+                "network_spread_delta_chi2: expected chi2 of the measurement from the final "
+                "network's own uncertainty (covariance of ln p from data and prior), i.e. "
+                "what it would teach the network whatever the effect (Shaft-Frame only); "
                 "null: not finite or not computed")}
 
 
