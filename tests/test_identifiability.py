@@ -166,3 +166,25 @@ def test_shaft_frame_sensitivity_matches_differences_and_spread_is_the_quadratic
     assert math.isclose(s, 0.04 * float(np.sum(np.abs(g[:, 0]) ** 2)) / 0.005**2, rel_tol=1e-10)
     assert math.isinf(network_spread(fam, Net((), p), names, np.diag([np.inf, 0, 0]), 0.0,
                                      f, 0.005))
+
+
+def test_report_names_the_first_decisive_measurement() -> None:
+    from vfmodel.report.diagnose_html import diagnose_html
+
+    doc = {"model": "m", "sentence": "s", "mismatch_found": True, "findings": [],
+           "identifiability": {
+               "effects": {"lubricant_two_layer": "not-identifiable"},
+               "parameters": {"a": "identifiable", "b": "prior-only"},
+               "parameter_std_log": {"a": {"data": 0.1, "with_prior": 0.1, "prior": None},
+                                     "b": {"data": None, "with_prior": 0.5, "prior": 0.5}},
+               "effect_details": {"lubricant_two_layer at bearing.lubricant": {
+                   "reason": "its parameters are not determined"}},
+               "definition": "d"},
+           "recommendations": [{"measurement": "impedance:Shaft-Frame", "speed_rpm": 300.0,
+                                "separates": ["lubricant_two_layer"],
+                                "expected_delta_chi2": 2860.0, "decisive": True,
+                                "network_spread_delta_chi2": None}]}
+    html = diagnose_html(doc, [])
+    assert "Identifiability of the effects" in html and "Recommended measurements" in html
+    assert "1 identifiable, 1 only through their prior, 0 not identifiable" in html
+    assert "measure <b>impedance:Shaft-Frame</b> at 300" in html

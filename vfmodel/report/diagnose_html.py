@@ -192,12 +192,14 @@ def _identifiability(doc: dict[str, Any]) -> str:
                                                        "expected_delta_chi2"]),
                  "yes" if r.get("decisive") else "no",
                  num(r.get("expected_delta_chi2_at_prior"), ""),
-                 num(r.get("data_delta_chi2_at_prior"), ""))
+                 num(r.get("data_delta_chi2_at_prior"), ""),
+                 num(r.get("network_spread_delta_chi2"), ""))
                 for i, r in enumerate(recs)]
         out += ["<h2 id='recommendations'>Recommended measurements</h2>",
                 f"<p class='text'>{E(str(doc.get('recommendations_definition', '')))}</p>",
                 table(["measurement", "speed", "separates", "expected Δχ²", "decisive",
-                       "Δχ² at prior size", "prior size on present data"], rrows)]
+                       "Δχ² at prior size", "prior size on present data",
+                       "network's own spread (χ²)"], rrows)]
     return "".join(out)
 
 
