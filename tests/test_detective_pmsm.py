@@ -8,6 +8,7 @@ and which decoys are named); white Gaussian noise for the time-window test.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +74,22 @@ def test_concealed_case_found_at_the_right_place(concealed: DiagnoseResult) -> N
 def test_null_case_is_clean(null: DiagnoseResult) -> None:
     _check_case(FAST_NULL, null.document)
     assert 0.8 <= null.document["start"]["chi2_red"] <= 1.2
+
+
+def test_null_identifiability_and_recommendations(null: DiagnoseResult) -> None:
+    """Every free parameter of the final network is classified; the one candidate of the
+    paper's network, the fixture inductance, acts only on the six measured spectra, so no
+    further measurement separates it (0 up to rounding, by construction)."""
+    doc = json.loads(json.dumps(null.document, allow_nan=False))
+    ident = doc["identifiability"]
+    assert set(ident["parameters"]) == set(null.diagnosis.final.names)
+    assert set(ident["parameters"].values()) <= {"identifiable", "prior-only",
+                                                 "not-identifiable"}
+    assert ident["effects"]["fixture_inductance"] != "identifiable"
+    recs = [r for r in doc["recommendations"] if r["separates"] == ["fixture_inductance"]]
+    assert {r["measurement"] for r in recs} >= {"impedance:Shaft-Frame", "channel:u_B_DE",
+                                                "channel:i_CM"}
+    assert all(r["expected_delta_chi2"] < 1e-9 and not r["decisive"] for r in recs)
 
 
 def test_null_residual_points_are_uncorrelated(null: DiagnoseResult) -> None:
@@ -154,6 +171,64 @@ def test_terms_side_by_side_equal_the_sequence(
     r1, j1 = fam.residual_jacobian((), q, names)  # type: ignore[attr-defined]
     np.testing.assert_allclose(r2, r1, rtol=0, atol=1e-12 * np.abs(r1).max())
     np.testing.assert_allclose(j2, j1, rtol=0, atol=1e-12 * np.abs(j1).max())
+
+
+def test_base_lubricant_does_not_act_while_turning(null: DiagnoseResult) -> None:
+    """Without the metallic contact the standstill film is fitted too; at a rotating speed
+    its per-speed copy replaces it, so its analytic Jacobian column is 0 on those records
+    (as central differences give). It was not: up to 322 per unit ln p on the rotating
+    records of data/pmsm40kw --without metallic_contact (measured before the fix)."""
+    from dataclasses import replace
+
+    fam = replace(null.family, base_effects=null.family.base_effects - {"metallic_contact"},
+                  _memo={}, _names={}, _lmaps={})
+    p = null.diagnosis.final.params
+    names = ("lubricant.C_1", "lubricant.R_1")
+    assert set(names) <= set(fam.free_names((), p))
+    _, jm = fam.residual_jacobian((), p, names)
+    for c, sl in zip(fam.channels, channel_slices(fam.channels), strict=True):
+        if c.where.startswith("bearing:") and not c.where.startswith("bearing:0rpm"):
+            assert np.max(np.abs(jm[sl])) == 0.0, c.where
+        if c.where.startswith("bearing:0rpm"):
+            assert np.max(np.abs(jm[sl])) > 0.0, c.where
+
+
+def test_shaft_frame_channels_residual_and_jacobian(null: DiagnoseResult) -> None:
+    """Shaft-to-frame spectra made by the network itself (standstill and the first rotating
+    speed, 0.1 % off): the residual is ln(1.001) / sigma, and the analytic Jacobian columns
+    (a machine parameter, a rotor-side one, the per-speed film) match central differences
+    to 1e-4 of their norm (direct solves of a small port; step 1e-4 in ln p)."""
+    from dataclasses import replace
+
+    from vfmodel.detective.problem import Channel
+    from vfmodel.detective.shaft_frame import PortTerm
+
+    fam0 = null.family
+    p = null.diagnosis.final.params
+    rpm = next(pr.speed_rpm for pr in fam0.preps if pr.speed_rpm > 0)
+    f = np.geomspace(1e3, 1e7, 31)
+    ports = []
+    for s in (0.0, rpm):
+        t = PortTerm("x", s, f, np.ones(31, complex), 0.005)
+        z = t.model(fam0, (), p) / 1.001
+        ports.append(PortTerm(f"impedance:Shaft-Frame@{s:g}rpm", s, f, z, 0.005))
+    fam = replace(fam0, ports=tuple(ports), channels=fam0.channels + tuple(
+        Channel(t.where, f, t.z_meas, np.full(31, 0.005)) for t in ports))
+    r = evaluate(fam, (), p)
+    tail = r[-4 * 31:]
+    np.testing.assert_allclose(tail.reshape(2, 2, 31)[:, 0], math.log(1.001) / 0.005,
+                               rtol=1e-9)
+    np.testing.assert_allclose(tail.reshape(2, 2, 31)[:, 1], 0.0, atol=1e-9)
+    names = ("ball.R_dc", "insulation.C_wr", f"lubricant.C_1@{rpm:g}rpm")
+    _, jm = fam.residual_jacobian((), p, names)
+    h = 1e-4
+    for k, n in enumerate(names):
+        rp = evaluate(fam, (), p.with_values({n: p[n] * math.exp(h)}))[-4 * 31:]
+        rm = evaluate(fam, (), p.with_values({n: p[n] * math.exp(-h)}))[-4 * 31:]
+        fd = (rp - rm) / (2 * h)
+        assert np.linalg.norm(jm[-4 * 31:, k] - fd) <= 1e-4 * np.linalg.norm(fd), n
+    # the per-speed film acts at its speed only
+    assert np.all(jm[-4 * 31:-2 * 31, 2] == 0) and np.any(jm[-2 * 31:, 2] != 0)
 
 
 def test_time_windows_no_false_alarm_and_a_burst_is_found() -> None:

@@ -14,7 +14,11 @@ Channels (the data the detective compares with):
 - ``bearing:<rpm>rpm:<phase>``: the H1 transfer from each terminal voltage to the bearing
   voltage at each recorded speed, the model's output passed through the same estimator as
   the measurement (paper eq. 21, :class:`vfmodel.greybox.objective.BearingTerm`); noise:
-  the random error of the H1 estimate from the coherence (no model-error floor).
+  the random error of the H1 estimate from the coherence (no model-error floor);
+- ``impedance:Shaft-Frame`` and ``impedance:Shaft-Frame@<rpm>rpm``: the shaft-to-frame
+  spectra of CONTRACT section 2a when the dataset holds them (standstill and recorded
+  speeds; :mod:`vfmodel.detective.shaft_frame`), after the records. The staged
+  identification does not use them; the detective's fits do.
 
 Parameters: the machine parameters of the standstill network (shared by every channel)
 and, per rotating speed ``s``, a copy ``<name>@<s>rpm`` of each speed-dependent lubricant
@@ -45,6 +49,7 @@ from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
 from vfmodel.greybox.effects import (
@@ -120,6 +125,7 @@ class PmsmFamily:
     preps: tuple[PreparedRecording, ...]
     start: ParamSet
     _cands: tuple[Candidate, ...] = ()
+    ports: tuple[PortTerm, ...] = ()    # shaft-to-frame spectra, channels after the records
     # compiled terms per structure (a memo of pure functions of the structure, not state)
     _memo: dict[frozenset[str], tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]] = \
         field(default_factory=dict, repr=False)
@@ -204,6 +210,7 @@ class PmsmFamily:
         for bt, p in zip(bts, self.preps, strict=True):
             h = bt.h1_model(self.at_speed(params, p.speed_rpm))
             out += [h[:, i] for i in range(h.shape[1])]
+        out += [t.model(self, applied, params) for t in self.ports]
         return out
 
     def residual(self, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
@@ -234,10 +241,14 @@ class PmsmFamily:
             if k >= 0 and pr[2] is not None:
                 bts[k]._memo.restore(pr[2])
         rs = [r for pr in parts for r in pr[0]]
-        if names is None:
-            return np.concatenate(rs), None
         js = [j for pr in parts for j in pr[1]]
-        return np.concatenate(rs), np.concatenate(js)
+        for port in self.ports:         # further impedances (Shaft-Frame): small, here
+            r, jm = port.residual(self, applied, params, names)
+            rs.append(r)
+            if names is not None:
+                assert jm is not None
+                js.append(jm)
+        return np.concatenate(rs), (np.concatenate(js) if names is not None else None)
 
     def _part_names(self, applied: Sequence[Candidate], params: ParamSet,
                     names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
@@ -257,6 +268,10 @@ class PmsmFamily:
         tag = speed_tag(p.speed_rpm)
         for j, n in enumerate(names):
             if "@" not in n:
+                # a base (standstill) lubricant value is replaced by its copy at this
+                # speed (at_speed): it does not act here
+                if p.speed_rpm > 0 and n + tag in params:
+                    continue
                 loc.append(n)
                 cols.append(j)
             elif n.endswith(tag):
@@ -322,6 +337,11 @@ class PmsmFamily:
         return network_poles(spec.build(params, bearing_state(0.0, spec.effects)))
 
     # ------------------------------------------------------------------ extras
+    def bearing_terms(self) -> tuple[BearingTerm, ...]:
+        """Bearing terms of the starting structure, one per recording (measured H1, its
+        frequency grid and whitening; :mod:`vfmodel.detective.recommend` uses them)."""
+        return self._terms((), self.start)[1]
+
     def outputs(self, applied: Sequence[Candidate], params: ParamSet) -> list[ArrF]:
         """Modelled bearing voltage (periodic steady state) of every recording."""
         _, bts = self._terms(applied, params)
@@ -388,6 +408,29 @@ def _with_speed_copies(params: ParamSet, speeds: Iterable[float]) -> ParamSet:
     return params.with_specs(extra)
 
 
+def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Progress
+           ) -> list[tuple[PortTerm, str, ArrC | None]]:
+    """Shaft-to-frame spectra of the dataset (CONTRACT section 2a) as detective terms, with
+    their noise method and black-box poles: the standstill one, and those at the recorded
+    speeds (another speed has no per-speed lubricant values to predict it with)."""
+    spectra: dict[float, FrequencyData] = {}
+    if SHAFT_FRAME in dataset.further_impedance:
+        spectra[0.0] = dataset.further_impedance[SHAFT_FRAME]
+    for s in dataset.impedance_at_speed:
+        if s.topology == SHAFT_FRAME and float(s.speed_rpm) in speeds:
+            spectra[float(s.speed_rpm)] = s.data
+    out = []
+    for k, (rpm, fd) in enumerate(sorted(spectra.items())):
+        progress("noise of the shaft-to-frame spectra", k, len(spectra))
+        full = fd.to_kind("Z")
+        nz = spectrum_noise(full.freq_hz, full.values[:, 0, 0])
+        thin = thin_spectra({SHAFT_FRAME: full}, fit_points)[SHAFT_FRAME]
+        where = f"impedance:{SHAFT_FRAME}" + (f"@{rpm:g}rpm" if rpm > 0 else "")
+        out.append((PortTerm(where, rpm, thin.freq_hz, thin.values[:, 0, 0], nz.sigma),
+                    nz.method, None if nz.blackbox is None else nz.blackbox.poles))
+    return out
+
+
 def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: int = 101,
                 n_rungs: int = 3, sections: Sequence[int] = (2, 3, 4),
                 progress: Progress = no_progress) -> PmsmFamily:
@@ -447,7 +490,11 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
             chans.append(Channel(f"bearing:{p.speed_rpm:g}rpm:{ph}", bt.freq_hz, hm,
                                  np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
                                  "h1_covariance"))
-    fam = replace(fam, channels=tuple(chans))      # shares the memo of compiled terms
+    ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
+    chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
+              for t, m, bb in ports]
+    # shares the memo of compiled terms
+    fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports))
     cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
     return replace(fam, _cands=cands)
 

@@ -24,7 +24,7 @@ from vfmodel.detective.problem import Family
 from vfmodel.errors import InputError
 from vfmodel.greybox.effects import EFFECT_INFO
 
-__all__ = ["DiagnoseResult", "diagnosis_json", "run_diagnose"]
+__all__ = ["DiagnoseResult", "diagnosis_json", "identifiability_json", "run_diagnose"]
 
 
 @dataclass(frozen=True)
@@ -137,12 +137,59 @@ def bearing_windows(family: Family, fit: FitResult, speeds: Iterable[str] | None
             for w in time_windows(recs, bandwidth_hz=F_CUT_HZ)]
 
 
+def _have(ds: Any) -> set[tuple[str, float]]:
+    """Further measurements (CONTRACT section 2a) the dataset already holds."""
+    have = {("impedance:Shaft-Frame", 0.0)} if "Shaft-Frame" in ds.further_impedance else set()
+    have |= {(f"impedance:{s.topology}", float(s.speed_rpm)) for s in ds.impedance_at_speed}
+    for r in ds.recordings:
+        have |= {(f"channel:{c}", float(r.speed_rpm or 0.0)) for c in r.extra_channels}
+    return have
+
+
+def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> dict[str, Any]:
+    """``identifiability`` and ``recommendations`` of ``diagnosis.json`` (CONTRACT section
+    7): :func:`vfmodel.detective.identifiability.assess` with the physical priors of the
+    grey-box parameters (PMSM datasets; a user network has none) and
+    :func:`vfmodel.detective.recommend.recommend` for every effect that is not
+    identifiable, rejected or ambiguous."""
+    from vfmodel.detective.identifiability import assess, grey_box_priors
+    from vfmodel.detective.recommend import comparisons, recommend
+
+    names = {n for fit in (d.final, *(t.fit for r in d.trials for t in r)) for n in fit.names}
+    priors = grey_box_priors(sorted(names), dataset) if dataset is not None else {}
+    a = assess(family, d, {n: p.sigma for n, p in priors.items()})
+    status = {k: v.status for k, v in a.effects.items()}
+    und = {k: v.undetermined for k, v in a.effects.items()}
+    cov = a.parameters.cov_post
+    recs = recommend(family, comparisons(d, status, und, priors),
+                     have=_have(dataset) if dataset is not None else (),
+                     network=(d.final, cov) if cov is not None else None)
+    return {"identifiability": a.as_json(),
+            "recommendations": [r.as_json() for r in recs],
+            "recommendations_definition": (
+                "expected_delta_chi2: sum over the would-be measured points of "
+                "|model with - model without|^2 / sigma^2, both fitted networks simulated "
+                "on the measurement (impedance: ln Z with the noise of the dataset's own "
+                "spectra; channels: H1 from the terminal voltages whitened by the measured "
+                "u_B H1 covariance at that speed, i_CM at the SNR of u_B); the network "
+                "with the effect at its fitted values against the same network without "
+                "it; *_at_prior: the effect's undetermined parameters at their prior "
+                "median (data_delta_chi2_at_prior: what that size costs on the data "
+                "already measured); each effect keeps its most separating speed per "
+                "measurement; decisive: above 10 + k ln m (the detective's acceptance); "
+                "network_spread_delta_chi2: expected chi2 of the measurement from the final "
+                "network's own uncertainty (covariance of ln p from data and prior), i.e. "
+                "what it would teach the network whatever the effect (Shaft-Frame only); "
+                "null: not finite or not computed")}
+
+
 def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
                  model: str | Path | None = None, progress: Progress = no_progress,
                  **options: Any) -> DiagnoseResult:
     """Build the family, run :func:`vfmodel.detective.diagnose.diagnose`, compose JSON."""
     without = tuple(without)
     fam: Family
+    ds = None
     if model is not None:
         if without:
             raise InputError("--without applies to the PMSM model; with --model the candidate "
@@ -154,10 +201,14 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
         from vfmodel.core.io_dataset import read_dataset
         from vfmodel.detective.pmsm import pmsm_family
 
-        fam = pmsm_family(read_dataset(dataset), without, progress=progress)
+        ds = read_dataset(dataset)
+        fam = pmsm_family(ds, without, progress=progress)
         options = {**PMSM_OPTIONS, **options}
     d = diagnose(fam, progress=progress, **options)
     doc = diagnosis_json(fam, d)
+    progress("identifiability and recommendations", 0, 1)
+    doc.update(identifiability_json(fam, d, ds))
+    progress("identifiability and recommendations", 1, 1)
     if getattr(fam, "preps", ()):
         flagged = {m.where.rsplit(":", 1)[0] for m in d.mismatches
                    if m.where.startswith("bearing:")}

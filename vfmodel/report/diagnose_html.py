@@ -59,6 +59,22 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         if loose:
             look.append(f"Parameters of {E(f['effect'])} not determined by the data: "
                         f"{E(', '.join(loose))}.")
+    ident = (doc.get("identifiability") or {}).get("effects", {})
+    recs = doc.get("recommendations") or []
+    for eff, status in ident.items():
+        if status == "identifiable":
+            continue
+        first = next((r for r in recs if eff in r.get("separates", [])), None)
+        found = any(f.get("effect") == eff for f in doc.get("findings", []))
+        if not found and not (first is not None and first.get("decisive")):
+            continue    # a rejected effect that no measurement would settle: the table says it
+        msg = f"{E(eff)} is {E(status)} from these data"
+        if first is not None and first.get("decisive"):
+            sp = first.get("speed_rpm")
+            msg += (f"; measure <b>{E(first['measurement'])}</b>"
+                    + (f" at {num(sp, 'rpm')}" if sp is not None else "")
+                    + f" (expected Δχ² {num(first.get('expected_delta_chi2'), '')})")
+        look.append(msg + " (see <a href='#identifiability'>Identifiability</a>).")
     if doc.get("findings"):
         look.append("Compare the before/after overlays and residuals of the channels "
                     "with a mismatch (shaded bands).")
@@ -143,18 +159,47 @@ def _identifiability(doc: dict[str, Any]) -> str:
     recs = doc.get("recommendations")
     out = []
     if ident:
-        rows = [(E(k), E(v)) for k, v in ident.get("effects", {}).items()]
+        details = ident.get("effect_details", {})
+        rows = []
+        for k, v in ident.get("effects", {}).items():
+            why = "; ".join(f"{E(w)}: {E(d.get('reason', ''))}" for w, d in details.items()
+                            if w.split(" at ")[0] == k)
+            flag = E(v) if v == "identifiable" else f"<span class='flag'>{E(v)}</span>"
+            rows.append((E(k), flag, f"<span class='text'>{why}</span>"))
         if rows:
-            out += ["<h2>Identifiability of the effects</h2>",
-                    table(["effect", "from these data"], rows)]
+            out += ["<h2 id='identifiability'>Identifiability of the effects</h2>",
+                    f"<p class='text'>{E(str(ident.get('definition', '')))}</p>",
+                    table(["effect", "from these data", "why"], rows)]
+        params = ident.get("parameters", {})
+        if params:
+            count = {c: sum(1 for v in params.values() if v == c)
+                     for c in ("identifiable", "prior-only", "not-identifiable")}
+            std = ident.get("parameter_std_log", {})
+            loose = [n for n, v in params.items() if v != "identifiable"]
+            prow = [(E(n), E(params[n]), num((std.get(n) or {}).get("data"), "", digits=3),
+                     num((std.get(n) or {}).get("with_prior"), "", digits=3),
+                     num((std.get(n) or {}).get("prior"), "", digits=3)) for n in loose]
+            out += [f"<h3>Parameters of the final network: {count['identifiable']} "
+                    f"identifiable, {count['prior-only']} only through their prior, "
+                    f"{count['not-identifiable']} not identifiable</h3>"]
+            if prow:
+                out.append(table(["parameter", "class", "std ln p (data)",
+                                  "std ln p (data + prior)", "prior std ln p"], prow))
     if recs:
         rrows = [(E(r["measurement"]), num(r.get("speed_rpm"), "rpm"),
                  E(", ".join(r.get("separates", []))),
                  num(r.get("expected_delta_chi2"), "", ["recommendations", str(i),
-                                                       "expected_delta_chi2"]))
+                                                       "expected_delta_chi2"]),
+                 "yes" if r.get("decisive") else "no",
+                 num(r.get("expected_delta_chi2_at_prior"), ""),
+                 num(r.get("data_delta_chi2_at_prior"), ""),
+                 num(r.get("network_spread_delta_chi2"), ""))
                 for i, r in enumerate(recs)]
-        out += ["<h2>Recommended measurements</h2>",
-                table(["measurement", "speed", "separates", "expected Δχ²"], rrows)]
+        out += ["<h2 id='recommendations'>Recommended measurements</h2>",
+                f"<p class='text'>{E(str(doc.get('recommendations_definition', '')))}</p>",
+                table(["measurement", "speed", "separates", "expected Δχ²", "decisive",
+                       "Δχ² at prior size", "prior size on present data",
+                       "network's own spread (χ²)"], rrows)]
     return "".join(out)
 
 

@@ -1,0 +1,190 @@
+"""Identifiability from the Fisher information and the ranking of further measurements
+(vfmodel.detective.identifiability, vfmodel.detective.recommend), on small problems with
+analytic answers: a linear model, a parameter without sensitivity, and a Shaft-Frame
+measurement that separates the metallic contact by construction."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vfmodel.detective.fit import FitResult
+from vfmodel.detective.identifiability import (
+    IDENTIFIED_STD_LOG,
+    classify,
+    effect_identifiability,
+    fisher_std,
+    grey_box_prior_sigma,
+    identifiability,
+)
+from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.recommend import Comparison, Net, recommend, separation
+from vfmodel.greybox.assembly import default_params
+from vfmodel.greybox.effects import PAPER_EFFECTS
+from vfmodel.greybox.identify import bearing_state
+from vfmodel.greybox.network import NetSpec
+from vfmodel.greybox.params import ParamSet, ParamSpec
+
+# r = (A x - y) / sigma: J = A / sigma, J^T J = 100 [[3, 3], [3, 5]], inverse
+# [[5, -3], [-3, 3]] / 600 -> std sqrt(5/600), sqrt(3/600); a prior of sigma 0.05 on x_1
+# adds 400: F = [[300, 300], [300, 900]], det 1.8e5 -> std sqrt(900/1.8e5), sqrt(300/1.8e5)
+_A = np.array([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]])
+_J = _A / 0.1
+
+
+def test_fisher_std_of_a_linear_model_is_the_analytic_one() -> None:
+    np.testing.assert_allclose(fisher_std(_J), [math.sqrt(5 / 600), math.sqrt(3 / 600)],
+                               rtol=1e-12)
+    np.testing.assert_allclose(fisher_std(_J, [None, 0.05]),
+                               [math.sqrt(900 / 1.8e5), math.sqrt(300 / 1.8e5)], rtol=1e-12)
+
+
+def test_a_parameter_without_sensitivity() -> None:
+    """Column of zeros: infinite std from the data; the prior alone then sets it."""
+    j = np.column_stack([_J[:, 0], np.zeros(3)])
+    sd = fisher_std(j)
+    assert sd[0] == math.sqrt(1 / 300) and math.isinf(sd[1])
+    assert fisher_std(j, [None, 0.5])[1] == 0.5
+    ident = identifiability(j, ("a", "b"), {"b": 0.5})
+    assert ident.status == ("identifiable", "prior-only")
+    # a prior wider than the bound does not make it identifiable; no prior neither
+    assert identifiability(j, ("a", "b"), {"b": 2.0}).status[1] == "not-identifiable"
+    assert identifiability(j, ("a", "b")).status[1] == "not-identifiable"
+    assert classify(0.99, 0.5) == "identifiable" and IDENTIFIED_STD_LOG == 1.0
+
+
+def _fit(names: Sequence[str], chi2: float) -> FitResult:
+    specs = [ParamSpec(n, 1.0, 1e-3, 1e3, "g", "", "") for n in names]
+    return FitResult((), ParamSet.from_specs(specs), tuple(names), np.zeros(3), chi2, 3,
+                     {}, np.eye(len(names)))
+
+
+def test_effect_classes_from_its_trial() -> None:
+    cand = Candidate("lubricant_dielectric_loss", "bearing.lubricant",
+                     (ParamSpec("b", 1.0, 1e-3, 1e3, "effect", "", ""),))
+    fit = _fit(("a", "b"), 1.0)
+    j = np.column_stack([_J[:, 0], np.zeros(3)])
+    e = effect_identifiability(cand, fit, j, -0.2)
+    assert e.status == "not-identifiable" and "do not tell" in e.reason
+    assert e.undetermined == ("b",)
+    assert effect_identifiability(cand, fit, j, -0.2, {"b": 0.3}).status == "prior-only"
+    assert effect_identifiability(cand, fit, _J, -40.0).status == "identifiable"
+    # another effect explains the data as well: not identifiable whatever the std
+    e = effect_identifiability(cand, fit, _J, -40.0, alternatives=("x at y",))
+    assert e.status == "not-identifiable" and "x at y" in e.reason
+    # a switch without parameters: seen or not by Delta chi2 alone
+    sw = Candidate("metallic_contact", "bearing.contact")
+    assert effect_identifiability(sw, fit, _J, -30.0).status == "identifiable"
+    assert effect_identifiability(sw, fit, _J, -0.5).status == "not-identifiable"
+
+
+def test_prior_sigma_of_per_speed_copies() -> None:
+    """``lubricant.C_1@100rpm`` takes the 100-rpm prior (log-normal, gsd 3 widened by the
+    3-300 kW spread), a plain name its standstill one; unknown names are left out."""
+    s = grey_box_prior_sigma(["lubricant.C_1@100rpm", "airgap.C_rf", "x.y"])
+    assert set(s) == {"lubricant.C_1@100rpm", "airgap.C_rf"}
+    assert s["lubricant.C_1@100rpm"] >= math.log(3.0)
+
+
+def test_separation_of_a_constant_relative_difference() -> None:
+    """1 % on 100 points at sigma 0.5 %: 100 * (0.01 / 0.005)^2 = 400."""
+    assert math.isclose(separation(np.full(100, 0.01 + 0j), 0.005), 400.0, rel_tol=1e-12)
+
+
+@dataclass
+class _Stub:
+    """The parts of a PMSM family recommend() uses, on the paper's network."""
+
+    channels: tuple[Channel, ...]
+    preps: tuple[object, ...] = ()
+
+    def spec(self, applied: Sequence[Candidate]) -> NetSpec:
+        return NetSpec(frozenset(PAPER_EFFECTS - {"metallic_contact"})
+                       | {c.effect for c in applied})
+
+    def at_speed(self, params: ParamSet, rpm: float) -> ParamSet:
+        return params
+
+    def state(self, rpm: float, applied: Sequence[Candidate]) -> str:
+        return bearing_state(rpm, self.spec(applied).effects)
+
+    def bearing_terms(self) -> tuple[object, ...]:
+        return ()
+
+
+def test_recommendation_that_separates_by_construction_ranks_first() -> None:
+    """The metallic contact closes the bearing at standstill: the shaft-to-frame impedance
+    at 0 rpm sees it (decisive); the fixture inductance is not in that path, so it
+    separates nothing (0 up to rounding) and ranks last."""
+    f = np.geomspace(1e3, 1e7, 41)
+    fam = _Stub((Channel("impedance:U-Frame", f, np.ones(41, complex), np.full(41, 0.005)),))
+    p = default_params()
+    mc = Candidate("metallic_contact", "bearing.contact")
+    fx = Candidate("fixture_inductance", "fixture")
+    cmps = [Comparison(("fixture_inductance",), Net((fx,), p), Net((), p), 1),
+            Comparison(("metallic_contact",), Net((mc,), p), Net((), p), 0)]
+    recs = recommend(fam, cmps)
+    assert [(r.measurement, r.speed_rpm) for r in recs] == [
+        ("impedance:Shaft-Frame", 0.0), ("impedance:Shaft-Frame", 0.0)]
+    assert recs[0].separates == ("metallic_contact",) and recs[0].decisive
+    assert recs[0].expected_delta_chi2 > 1e4
+    assert recs[1].separates == ("fixture_inductance",)
+    assert recs[1].expected_delta_chi2 < 1e-12 and not recs[1].decisive   # rounding only
+    # a measurement the dataset holds is not recommended
+    assert recommend(fam, cmps, have={("impedance:Shaft-Frame", 0.0)}) == []
+
+
+def test_a_refit_worse_than_the_network_without_is_not_assessed() -> None:
+    """Nested networks: Delta chi2 > 0 beyond k means the refit stopped short."""
+    cand = Candidate("winding_skin_effect", "R1",
+                     (ParamSpec("b", 1.0, 1e-3, 1e3, "effect", "", ""),))
+    e = effect_identifiability(cand, _fit(("a", "b"), 1.0), _J, +35.0)
+    assert e.status == "not-identifiable" and "worse" in e.reason
+
+
+def test_shaft_frame_sensitivity_matches_differences_and_spread_is_the_quadratic_form() -> None:
+    """``d ln Z_SF / d ln p`` (adjoint) against central differences of the impedance, and
+    the network spread of one parameter of variance c: ``c sum |g|^2 / sigma^2``."""
+    from vfmodel.detective.recommend import _dlnz_dlnp, _shaft_frame, network_spread
+
+    f = np.geomspace(1e3, 1e7, 21)
+    fam = _Stub((Channel("impedance:U-Frame", f, np.ones(21, complex), np.full(21, 0.005)),))
+    p = default_params()
+    names = ("lubricant.C_1", "ball.R_dc", "airgap.C_rf")
+    g = _dlnz_dlnp(fam, Net((), p), names, 0.0, f)
+    h = 1e-3    # central differences: error h^2 ~ 1e-6 of the largest value (a smaller
+    for j, n in enumerate(names):   # step meets the solver's rounding, 5e-6 at 1e-5)
+        zp = _shaft_frame(fam, Net((), p.with_values({n: p[n] * math.exp(h)})), 0.0, f)
+        zm = _shaft_frame(fam, Net((), p.with_values({n: p[n] * math.exp(-h)})), 0.0, f)
+        fd = np.log(zp / zm) / (2 * h)
+        np.testing.assert_allclose(g[:, j], fd, rtol=0, atol=1e-5 * float(np.max(np.abs(fd))))
+    cov = np.diag([0.04, 0.0, 0.0])
+    s = network_spread(fam, Net((), p), names, cov, 0.0, f, 0.005)
+    assert math.isclose(s, 0.04 * float(np.sum(np.abs(g[:, 0]) ** 2)) / 0.005**2, rel_tol=1e-10)
+    assert math.isinf(network_spread(fam, Net((), p), names, np.diag([np.inf, 0, 0]), 0.0,
+                                     f, 0.005))
+
+
+def test_report_names_the_first_decisive_measurement() -> None:
+    from vfmodel.report.diagnose_html import diagnose_html
+
+    doc = {"model": "m", "sentence": "s", "mismatch_found": True, "findings": [],
+           "identifiability": {
+               "effects": {"lubricant_two_layer": "not-identifiable"},
+               "parameters": {"a": "identifiable", "b": "prior-only"},
+               "parameter_std_log": {"a": {"data": 0.1, "with_prior": 0.1, "prior": None},
+                                     "b": {"data": None, "with_prior": 0.5, "prior": 0.5}},
+               "effect_details": {"lubricant_two_layer at bearing.lubricant": {
+                   "reason": "its parameters are not determined"}},
+               "definition": "d"},
+           "recommendations": [{"measurement": "impedance:Shaft-Frame", "speed_rpm": 300.0,
+                                "separates": ["lubricant_two_layer"],
+                                "expected_delta_chi2": 2860.0, "decisive": True,
+                                "network_spread_delta_chi2": None}]}
+    html = diagnose_html(doc, [])
+    assert "Identifiability of the effects" in html and "Recommended measurements" in html
+    assert "1 identifiable, 1 only through their prior, 0 not identifiable" in html
+    assert "measure <b>impedance:Shaft-Frame</b> at 300" in html

@@ -1,0 +1,392 @@
+"""The further measurement that would resolve an effect the data cannot (issue 14, CONTRACT
+sections 2a and 7 ``recommendations``).
+
+For an effect that is not identifiable, rejected, or ambiguous, two networks are compared:
+the fitted one with the effect (its trial, or the finding's network) and the same network
+with the effect removed, every other value kept (for an ambiguous finding also: with an
+equally good alternative of its round in its place, at that alternative's fitted values).
+Keeping the other values matters: the separately fitted network without the effect differs
+from the trial also in parameters the data do not determine (the standstill film above
+all), and on a concealed case (``pmsm_winding_skin_b``) that difference alone gave
+``fixture_inductance``, which does not enter the shaft-to-frame path at all, an expected
+Delta chi2 of 1.75e4 on it. Each candidate measurement is simulated on both networks, and
+its separation is the expected chi-square difference
+
+    expected_delta_chi2 = sum over the measured points |model_with - model_without|^2 / sigma^2
+
+(the chi-square by which the network without the effect would fit noise-free data of the
+network with it, at the stated noise; Delta chi2 > 10 is very strong evidence on the scale
+the detective accepts effects with, Kass and Raftery 1995). Measurements (what the PMSM
+network predicts, :mod:`vfmodel.greybox.assembly`):
+
+- ``impedance:Shaft-Frame``: the impedance between the NDE shaft end ``SN`` and the frame,
+  terminals open, on the detective's impedance grid; at standstill (bearing state of the
+  network at 0 rpm, standstill lubricant values) and at each recorded speed (the fitted
+  per-speed lubricant values of that speed). Noise: ``sigma`` of ``Re ln Z`` and ``Im ln Z``
+  = the median noise the detective estimated for the dataset's own impedance spectra (the
+  same analyser), or :data:`IMPEDANCE_SIGMA_DEFAULT` (0.5 %) without spectra.
+- ``channel:u_B_DE``: the drive-end shaft end ``SD`` to frame, as the H1 transfer from the
+  three terminal voltages at a recorded speed, on the bins of that speed's bearing term and
+  whitened by the covariance of its measured ``u_B`` H1 (:class:`vfmodel.greybox.objective.
+  BearingTerm`): the DE probe is taken to be as noisy as the NDE one.
+- ``channel:i_CM``: the sum of the terminal currents, the same way, its H1 differences
+  scaled so that the channel has the signal-to-noise ratio of the bearing-voltage channel
+  (norm of the measured ``u_B`` H1 over that of the network's ``i_CM`` transfer).
+- ``recording:speed`` at 0 rpm when the dataset has no standstill recording: ``u_B`` with
+  the bearing in its standstill state, whitened like the lowest recorded speed. Other
+  speeds are not offered: the network has no values for the lubricant at a speed that was
+  not recorded (the per-speed film is fitted freely), so it cannot predict them.
+
+Measurements the dataset already holds are not recommended. ``dv/dt`` and temperature
+recordings are not offered: the network has no parameter that depends on either. Each
+(effect, measurement) keeps its most separating speed; the list is ranked by
+``expected_delta_chi2``, largest first. ``decisive`` marks a separation above the
+detective's own acceptance, ``10 + k ln m`` (``k`` the effect's parameters, ``m`` the
+measurement's residual entries), i.e. a measurement after which the effect would pass
+(or fail) the detective's BIC test.
+
+The effect enters at its trial's fitted values (``expected_delta_chi2``, the ranking). Where
+the data do not determine its new parameters (``std`` of ``ln p`` above
+:data:`vfmodel.detective.identifiability.IDENTIFIED_STD_LOG` in its trial) the fitted size
+is arbitrary (for a rejected effect often negligible), so the separation is also given with
+those parameters at the median of their physical prior (``expected_delta_chi2_at_prior``,
+``prior_median_for``) together with the chi-square increase that size causes on the data
+already measured (``data_delta_chi2_at_prior``: large means the data already exclude an
+effect of typical size, so the typical-size separation does not apply). Nothing is refitted
+on the would-be data: a refit of the network without the effect could absorb part of the
+difference, so the value is an upper bound of what the measurement would show.
+
+Measured on the virtual bench (``data/pmsm40kw``, ``--without lubricant_two_layer``, the
+two-layer film not found): ``impedance:Shaft-Frame`` at 300 rpm ranks first (expected
+Delta chi2 2.9e3 on 101 points). The same bench made with ``--extra-measurements`` shows
+that the measurement is decisive, but for more than the effect: the final network misses
+the measured shaft-to-frame impedance by a factor of about 2 in ``|Z|`` at every speed
+(chi2_red 1.3e4 at standstill, 1.6e4-1.8e4 at speed, at the bench's 0.5 % noise), with or
+without the two-layer film, because the six spectra and the bearing voltage leave that
+path's parameters undetermined. ``expected_delta_chi2`` holds the rest of the network fixed
+and so measures the effect's own share, not what the measurement would teach the network.
+That is ``network_spread_delta_chi2`` (:func:`network_spread`, shaft-to-frame only): the
+expected chi-square of the measurement from the final network's own uncertainty,
+``sum g^T Cov g / sigma^2`` with ``g = d ln Z / d ln p`` (adjoint) and ``Cov`` the
+covariance of ``ln p`` from data and prior (:mod:`vfmodel.detective.identifiability`). On
+that bench it is 9.2e5 at 300 rpm and 5.2e5 at standstill (101 points), against the 3.3e6
+and 2.7e6 by which the final network actually misses the measured impedance on 101 of its
+points: the right order, 3.6-5 times low.
+
+Reference: R. E. Kass, A. E. Raftery, J. Am. Stat. Assoc. 90(430), 773-795, 1995.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vfmodel.detective.fit import FitResult, evaluate
+from vfmodel.detective.problem import Candidate
+from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
+from vfmodel.greybox.objective import dlogv_dlogp
+from vfmodel.greybox.params import ParamSet
+
+__all__ = ["IMPEDANCE_SIGMA_DEFAULT", "Comparison", "Net", "Recommendation", "comparisons",
+           "network_spread", "recommend", "separation"]
+
+ArrF = NDArray[np.float64]
+ArrC = NDArray[np.complex128]
+
+IMPEDANCE_SIGMA_DEFAULT = 0.005
+"""Noise of ``Re ln Z`` and ``Im ln Z`` of an impedance measurement when the dataset has no
+spectra to estimate it from (0.5 % and 5 mrad, an impedance analyser's basic accuracy)."""
+
+_OUT = ("SD", BEARING_NODE, *(f"i({s})" for s in SOURCES))
+_DE_NODE = "SD"
+
+
+@dataclass(frozen=True)
+class Net:
+    """A network: the candidates applied to the family's starting network, and values."""
+
+    applied: tuple[Candidate, ...]
+    params: ParamSet
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Two networks a measurement should tell apart: ``with_`` holds the effect(s) named in
+    ``separates`` (``n_params`` new parameters), ``without`` does not."""
+
+    separates: tuple[str, ...]
+    with_: Net
+    without: Net
+    n_params: int
+    with_prior: Net | None = None
+    prior_names: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Recommendation:
+    """A measurement and the separation it would give (module docstring)."""
+
+    measurement: str
+    speed_rpm: float | None
+    separates: tuple[str, ...]
+    expected_delta_chi2: float
+    decisive: bool
+    n_points: int
+    noise: str
+    at_prior: float | None = None
+    data_at_prior: float | None = None
+    prior_names: tuple[str, ...] = ()
+    network_spread: float | None = None
+
+    def as_json(self) -> dict[str, Any]:
+        def f(x: float | None) -> float | None:
+            return float(x) if x is not None and math.isfinite(x) else None
+
+        return {"measurement": self.measurement, "speed_rpm": self.speed_rpm,
+                "separates": list(self.separates),
+                "expected_delta_chi2": f(self.expected_delta_chi2),
+                "decisive": self.decisive, "n_points": self.n_points, "noise": self.noise,
+                "expected_delta_chi2_at_prior": f(self.at_prior),
+                "data_delta_chi2_at_prior": f(self.data_at_prior),
+                "prior_median_for": list(self.prior_names),
+                "network_spread_delta_chi2": f(self.network_spread)}
+
+
+def _shaft_frame(family: Any, fit: Net, rpm: float, freq: ArrF) -> ArrC:
+    spec = family.spec(fit.applied)
+    c = spec.build(family.at_speed(fit.params, rpm), family.state(rpm, fit.applied))
+    pair = (BEARING_NODE, c.ground)
+    return np.asarray(c.mna.response(freq, [pair], [pair])[:, 0, 0])
+
+
+def _transfers(family: Any, fit: Net, rpm: float, freq: ArrF) -> dict[str, ArrC]:
+    """``(n_f, 3)`` transfers from the terminal voltages to ``u_B_DE``, ``u_B``, ``i_CM``."""
+    spec = family.spec(fit.applied)
+    c = spec.build(family.at_speed(fit.params, rpm), family.state(rpm, fit.applied),
+                   sources=True)
+    h = c.mna.response(freq, SOURCES, _OUT)
+    return {"u_B_DE": h[:, 0, :], "u_B": h[:, 1, :], "i_CM": h[:, 2:, :].sum(axis=1)}
+
+
+def _dlnz_dlnp(family: Any, fit: Net, names: Sequence[str], rpm: float, freq: ArrF
+               ) -> ArrC:
+    """``d ln Z_SF / d ln p`` (n_f, len(names)) of the shaft-to-frame impedance at ``rpm``
+    (adjoint network sensitivities chained through the element values; a per-speed copy
+    ``<name>@<s>rpm`` acts at ``s`` only, the base lubricant value not at all while it
+    turns)."""
+    spec = family.spec(fit.applied)
+    state = family.state(rpm, fit.applied)
+    ps = family.at_speed(fit.params, rpm)
+    tag = f"@{rpm:g}rpm"
+    over = {n[: -len(tag)] for n in names if rpm > 0 and n.endswith(tag)}
+    loc, cols = [], []
+    for j, n in enumerate(names):
+        if "@" not in n and n not in over:
+            loc.append(n)
+            cols.append(j)
+        elif rpm > 0 and n.endswith(tag):
+            loc.append(n[: -len(tag)])
+            cols.append(j)
+    out = np.zeros((freq.size, len(names)), dtype=complex)
+    if not loc:
+        return out
+    c = spec.build(ps, state)
+    v = np.asarray(c.param_values, dtype=float)
+    dl = dlogv_dlogp(ps, loc, spec, state)
+    used = np.flatnonzero(np.any(dl != 0, axis=1))
+    pair = (BEARING_NODE, c.ground)
+    z, dz = c.mna.response_and_jacobian(freq, [pair], [pair], v,
+                                        params=[c.mna.param_names[e] for e in used],
+                                        diagonal=True)
+    g = ((dz[:, 0, :] * v[used]) @ dl[used]) / z[:, 0, 0][:, None]
+    out[:, cols] = g
+    return out
+
+
+def network_spread(family: Any, fit: Net, names: Sequence[str], cov: ArrF, rpm: float,
+                   freq: ArrF, sigma: float) -> float:
+    """Expected chi-square of a shaft-to-frame measurement at ``rpm`` from the network's own
+    uncertainty: ``sum_f g_f^T cov g_f / sigma^2`` over Re and Im of ``g = d ln Z / d ln p``
+    with ``cov`` the covariance of ``ln p`` of ``names`` (data and prior); ``inf`` when an
+    unbounded direction enters."""
+    g = _dlnz_dlnp(family, fit, names, rpm, freq)
+    total = 0.0
+    finite = np.isfinite(np.diag(cov))
+    for part in (g.real, g.imag):
+        if np.any(np.abs(part[:, ~finite]) > 0):
+            return math.inf
+        q = part[:, finite]
+        total += float(np.einsum("fi,ij,fj->", q, cov[np.ix_(finite, finite)], q))
+    return total / sigma**2
+
+
+def separation(d_log: ArrC, sigma: float) -> float:
+    """``sum |d|^2 / sigma^2`` of differences ``d`` of ``ln Z`` (Re and Im each with
+    standard deviation ``sigma``)."""
+    return float(np.sum(np.abs(d_log) ** 2) / sigma**2)
+
+
+def _decisive(delta: float, k: int, m: int) -> bool:
+    return bool(delta > 10.0 + k * math.log(max(m, 2)))
+
+
+def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]],
+                 sig: float, freq: ArrF) -> dict[tuple[str, float], tuple[float, int, int, str]]:
+    """``(measurement, rpm) -> (Delta chi2, points, residual entries m, noise)`` of every
+    measurement not in ``have`` between the networks ``a`` and ``b``."""
+    bts = family.bearing_terms() if hasattr(family, "bearing_terms") else ()
+    speeds = [float(p.speed_rpm) for p in getattr(family, "preps", ())]
+    imp_noise = f"ln Z with sigma {sig:.3g} (Re and Im) on {freq.size} points"
+    rec_noise = "H1 from the terminal voltages, whitened by the covariance of the measured " \
+                "u_B H1 at {}"
+    out: dict[tuple[str, float], tuple[float, int, int, str]] = {}
+    for rpm in [0.0] + [s for s in speeds if s > 0]:
+        if ("impedance:Shaft-Frame", rpm) not in have:
+            d = separation(np.log(_shaft_frame(family, a, rpm, freq)
+                                  / _shaft_frame(family, b, rpm, freq)), sig)
+            out[("impedance:Shaft-Frame", rpm)] = (d, freq.size, 2 * freq.size, imp_noise)
+    for bt, rpm in zip(bts, speeds, strict=True):
+        f = bt.freq_hz
+        ha, hb = _transfers(family, a, rpm, f), _transfers(family, b, rpm, f)
+        m = 2 * bt.h_meas.size
+        noise = rec_noise.format("that speed")
+        if ("channel:u_B_DE", rpm) not in have:
+            d = float(np.sum(np.abs(bt.weigh(ha["u_B_DE"] - hb["u_B_DE"])) ** 2))
+            out[("channel:u_B_DE", rpm)] = (d, f.size, m, noise)
+        if ("channel:i_CM", rpm) not in have:
+            g = float(np.linalg.norm(bt.h_meas)) / max(float(np.linalg.norm(hb["i_CM"])),
+                                                       1e-300)
+            d = float(np.sum(np.abs(bt.weigh(g * (ha["i_CM"] - hb["i_CM"]))) ** 2))
+            out[("channel:i_CM", rpm)] = (d, f.size, m, noise + ", at the SNR of u_B")
+    if bts and 0.0 not in speeds:
+        bt = bts[0]
+        f = bt.freq_hz
+        d = float(np.sum(np.abs(bt.weigh(_transfers(family, a, 0.0, f)["u_B"]
+                                         - _transfers(family, b, 0.0, f)["u_B"])) ** 2))
+        out[("recording:speed", 0.0)] = (d, f.size, 2 * bt.h_meas.size,
+                                         rec_noise.format(f"{speeds[0]:g} rpm"))
+    return out
+
+
+def recommend(family: Any, cmps: Sequence[Comparison], *,
+              have: Collection[tuple[str, float]] = (),
+              impedance_sigma: float | None = None,
+              network: tuple[FitResult, ArrF] | None = None) -> list[Recommendation]:
+    """Ranked recommendations (module docstring) for a PMSM family
+    (:class:`vfmodel.detective.pmsm.PmsmFamily`); ``have``: (measurement, speed) pairs the
+    dataset already holds; ``impedance_sigma``: noise of ``ln Z`` (default: the median of
+    the family's impedance channels, else :data:`IMPEDANCE_SIGMA_DEFAULT`); ``network``:
+    the final fit and the covariance of ``ln p`` of its names (data and prior), for the
+    network's own spread on each shaft-to-frame measurement (:func:`network_spread`)."""
+    if not hasattr(family, "spec") or not cmps:
+        return []
+    imp = [c for c in family.channels if c.where.startswith("impedance:")]
+    sig = impedance_sigma if impedance_sigma is not None else (
+        float(np.median(np.concatenate([c.sigma for c in imp]))) if imp
+        else IMPEDANCE_SIGMA_DEFAULT)
+    freq = imp[0].freq_hz if imp else np.geomspace(1e3, 1e7, 101)
+    spread: dict[float, float] = {}
+    out: list[Recommendation] = []
+    for cmp in cmps:
+        fitted = _separations(family, cmp.with_, cmp.without, have, sig, freq)
+        prior: dict[tuple[str, float], tuple[float, int, int, str]] = {}
+        data_prior: float | None = None
+        if cmp.with_prior is not None:
+            prior = _separations(family, cmp.with_prior, cmp.without, have, sig, freq)
+            r = evaluate(family, cmp.with_prior.applied, cmp.with_prior.params)
+            r0 = evaluate(family, cmp.with_.applied, cmp.with_.params)
+            data_prior = float(r @ r - r0 @ r0)
+        best: dict[str, Recommendation] = {}
+        for (meas, rpm), (d, n, m, noise) in fitted.items():
+            if meas in best and best[meas].expected_delta_chi2 >= d:
+                continue
+            dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
+            ns = None
+            if network is not None and meas == "impedance:Shaft-Frame":
+                if rpm not in spread:
+                    fit, cov = network
+                    spread[rpm] = network_spread(family, Net(tuple(fit.applied), fit.params),
+                                                 fit.names, cov, rpm, freq, sig)
+                ns = spread[rpm]
+            best[meas] = Recommendation(meas, rpm, cmp.separates, d,
+                                        _decisive(d, cmp.n_params, m), n, noise, dp,
+                                        data_prior, cmp.prior_names, ns)
+        out += best.values()
+    return sorted(out, key=lambda r: -r.expected_delta_chi2)
+
+
+def _without(fit: FitResult, cand: Candidate, instead: Any = None) -> Net:
+    """``fit``'s network with ``cand`` removed (and the trial ``instead``'s candidate with
+    its fitted values added), every other value kept."""
+    applied = tuple(c for c in fit.applied if c.key != cand.key)
+    params = fit.params
+    if instead is not None:
+        applied = (*applied, instead.candidate)
+        params = params.with_specs(s for s in instead.candidate.params if s.name not in params)
+        params = params.with_values({s.name: instead.fit.params[s.name]
+                                     for s in instead.candidate.params})
+    return Net(applied, params)
+
+
+def _net(fit: FitResult) -> Net:
+    return Net(tuple(fit.applied), fit.params)
+
+
+def _at_prior(fit: FitResult, names: Sequence[str], priors: Mapping[str, Any] | None
+              ) -> tuple[Net | None, tuple[str, ...]]:
+    """``fit``'s network with the values of ``names`` at their prior's median (clipped to
+    the parameter's bounds) where ``priors`` has one; ``None`` when none has."""
+    pri = priors or {}
+    use = tuple(n for n in names if n in pri and n in fit.params)
+    if not use:
+        return None, ()
+    p = fit.params.with_values({n: float(pri[n].median) for n in use}, clip=True)
+    return Net(tuple(fit.applied), p), use
+
+
+def comparisons(diag: Any, status: Mapping[tuple[str, str], str],
+                undetermined: Mapping[tuple[str, str], Sequence[str]] | None = None,
+                priors: Mapping[str, Any] | None = None) -> list[Comparison]:
+    """What the measurements should separate in a :class:`~vfmodel.detective.diagnose.
+    Diagnosis`: every rejected candidate (its last trial's network against the same network
+    without it) and every finding that is not ``identifiable`` in ``status`` (likewise; an
+    ambiguous one also against each equally good alternative of its round in its place).
+
+    ``undetermined``: per effect, its new parameters the data do not determine; with
+    ``priors`` (objects with a ``median``, :func:`vfmodel.detective.identifiability.
+    grey_box_priors`) they take their prior's median in the network with the effect: the
+    data say nothing about the effect's size, physics gives its typical size."""
+    und = undetermined or {}
+    out: list[Comparison] = []
+    for i, f in enumerate(diag.findings):
+        if status.get(f.candidate.key) == "identifiable":
+            continue
+        k = f.candidate.n_params
+        wp, names = _at_prior(f.after, und.get(f.candidate.key, ()), priors)
+        out.append(Comparison((f.candidate.effect,), _net(f.after),
+                              _without(f.after, f.candidate), k, wp, names))
+        for t in diag.trials[i] if i < len(diag.trials) else ():
+            if f"{t.candidate.effect} at {t.candidate.location}" in f.alternatives:
+                out.append(Comparison((f.candidate.effect, t.candidate.effect),
+                                      _net(f.after), _without(f.after, f.candidate, t),
+                                      max(k, t.candidate.n_params)))
+    for c, _ in diag.rejected:
+        t = _last(diag, c.key)
+        if t is not None:
+            wp, names = _at_prior(t.fit, und.get(c.key, ()), priors)
+            out.append(Comparison((c.effect,), _net(t.fit), _without(t.fit, c), c.n_params,
+                                  wp, names))
+    return out
+
+
+def _last(diag: Any, key: tuple[str, str]) -> Any:
+    for rnd in reversed(diag.trials):
+        for t in rnd:
+            if t.candidate.key == key:
+                return t
+    return None
