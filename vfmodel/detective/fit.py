@@ -122,8 +122,18 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
         return evaluate(family, applied, params.from_log(x, names))[sel]
 
     analytic = getattr(family, "residual_jacobian", None)
+    last: dict[bytes, ArrF] = {}
 
     def jac(x: ArrF) -> ArrF:
+        # the last Jacobian is kept: the solver's final point is usually a point where it
+        # already asked for it, and the covariance below needs it again
+        key = x.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = _jac(x)
+        return last[key]
+
+    def _jac(x: ArrF) -> ArrF:
         if analytic is not None:
             return np.asarray(analytic(applied, params.from_log(x, names), names)[1])[sel]
         r0 = fun(x)
