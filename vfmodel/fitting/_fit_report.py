@@ -142,19 +142,25 @@ def _to_model(
     return RationalModel(poles=p_arr, residues=r_arr, d=d, e=e, kind=fd.kind, z0=fd.z0)
 
 
-def fit_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float, float]:
-    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4)."""
-    diff = model(fd.freq_hz) - fd.values
+def fit_errors(
+    model: RationalModel, fd: FrequencyData, values: NDArray[np.complex128] | None = None
+) -> tuple[float, float, float]:
+    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4);
+    ``values``: the model's response at ``fd.freq_hz`` if already evaluated."""
+    diff = (model(fd.freq_hz) if values is None else values) - fd.values
     rms = float(np.sqrt(np.mean(np.abs(diff) ** 2)))
     rel = float(np.linalg.norm(diff) / max(float(np.linalg.norm(fd.values)), 1e-300))
     return rms, rel, float(np.max(np.abs(diff)))
 
 
-def point_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float]:
+def point_errors(
+    model: RationalModel, fd: FrequencyData, values: NDArray[np.complex128] | None = None
+) -> tuple[float, float]:
     """(RMS, max) over frequency of the per-point relative error
     ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F (a zero sample counts against 1e-12
-    of the largest)."""
-    diff = np.linalg.norm((model(fd.freq_hz) - fd.values).reshape(fd.n_freq, -1), axis=1)
+    of the largest); ``values`` as for :func:`fit_errors`."""
+    hm = model(fd.freq_hz) if values is None else values
+    diff = np.linalg.norm((hm - fd.values).reshape(fd.n_freq, -1), axis=1)
     norm = np.linalg.norm(fd.values.reshape(fd.n_freq, -1), axis=1)
     norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
     e = diff / np.where(norm > 0, norm, 1.0)
@@ -219,8 +225,9 @@ def _make_report(
     history: tuple[_vf_core.IterationRecord, ...],
     wname: str,
 ) -> FitReport:
-    rms, rel, mx = fit_errors(model, fd)
-    prms, pmax = point_errors(model, fd)
+    hm = model(fd.freq_hz)
+    rms, rel, mx = fit_errors(model, fd, hm)
+    prms, pmax = point_errors(model, fd, hm)
     wrel = _vf_core.weighted_rel_rms(prob, _vf_core.evaluate(prob, coef))
     steps = tuple(
         FitStep(r.order, float(r.weighted_rel_rms), float(r.sigma_deviation)) for r in history

@@ -245,7 +245,8 @@ def auto_order(
             if small.weighted_rel_rms < res.weighted_rel_rms:
                 res, added = small, core.n_poles(grown[1][:1])
         coef = _prune(prob, res.coef, _DROP_FRACTION * noise * data_rms)
-        err = err_last = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
+        err = err_last = (res.weighted_rel_rms if coef is res.coef
+                          else core.weighted_rel_rms(prob, core.evaluate(prob, coef)))
         n = core.n_poles(coef.reps)
         tried.append((n, err, coef))
         if target is None and err <= _RESIDUAL_CHECK * margin * noise:  # refine
