@@ -72,8 +72,10 @@ def _sigma_rows_common(
     """
     k_f, m = prob.n_freq, prob.n_resp
     n1 = basis_s.shape[1]
-    w = prob.w[:, 0]
-    q1 = _thin_q(_realify(basis_c * w[:, None]))  # (2K, Nc)
+    a1 = np.empty((2 * k_f, basis_c.shape[1]), order="F")  # [Re; Im] of W Phi_c
+    np.multiply(basis_c.real, prob.w, out=a1[:k_f])
+    np.multiply(basis_c.imag, prob.w, out=a1[k_f:])
+    q1 = _thin_q(a1)  # (2K, Nc)
     prod = prob.wh[:, :, None] * basis_s[:, None, :]  # (K, M, N+1)
     a2 = np.empty((2 * k_f, m, n1))
     np.negative(prod.real, out=a2[:k_f])
@@ -248,13 +250,13 @@ def iterate(
     prev = np.inf
     converged = False
     it = it_best = 0
-    pf, basis = bases(prob, reps)
+    pf, basis, _ = bases(prob, reps)
     last = err_hint
     for it in range(1, max_iterations + 1):
         exact_rows = precise if precise is not None else bool(last <= _GRAM_ERROR)
         reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf, basis)
         reps = bound_real_poles(reps, prob.pole_bounds)
-        pf, basis = bases(prob, reps)
+        pf, basis, _ = bases(prob, reps)
         coef = solve_residues(prob, reps, pf, basis)
         err = weighted_rel_rms(prob, evaluate(prob, coef, pf, basis))
         history.append(IterationRecord(n_poles(reps), err, dev))

@@ -128,9 +128,16 @@ class Problem:
         return out
 
     @cached_property
-    def _bases(self) -> dict[bytes, tuple[ComplexArray, ComplexArray]]:
+    def _bases(self) -> dict[bytes, tuple[ComplexArray, ComplexArray, ComplexArray | None]]:
         """Cache of :func:`bases`."""
         return {}
+
+    @cached_property
+    def _s_all(self) -> ComplexArray:
+        """The sample frequencies, then those of the anchors (common weights only)."""
+        if self.w.shape[1] == 1 and self.anchors is not None:
+            return np.concatenate([self.s, self.anchors[0]])
+        return self.s
 
     @cached_property
     def _residue_rhs(self) -> tuple[FloatArray, FloatArray | None, float]:
@@ -289,16 +296,24 @@ def _with_extra(prob: Problem, s: ComplexArray, pf: ComplexArray) -> ComplexArra
 _BASIS_CACHE = 8  # bases of this many pole sets are kept per problem
 
 
-def bases(prob: Problem, reps: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+def bases(
+    prob: Problem, reps: ComplexArray
+) -> tuple[ComplexArray, ComplexArray, ComplexArray | None]:
     """Partial fractions (K, N) and full basis (K, Nc) of ``reps`` at the problem's
-    frequencies, kept for the last few pole sets (the automatic order evaluates, prunes
-    and ranks the same poles several times). The arrays must not be modified."""
+    frequencies and the full basis at the anchor frequencies (or None), kept for the last
+    few pole sets (the automatic order evaluates, prunes and ranks the same poles several
+    times). The arrays must not be modified."""
     key = reps.tobytes()
     cache = prob._bases
     hit = cache.get(key)
     if hit is None:
-        pf = partial_fractions(prob.s, reps)
-        hit = (pf, _with_extra(prob, prob.s, pf))
+        k = prob.n_freq
+        ext = partial_fractions(prob._s_all, reps)  # samples and anchors in one pass
+        pf = ext[:k]
+        basis_v = None
+        if ext.shape[0] > k and prob.anchors is not None:
+            basis_v = _with_extra(prob, prob.anchors[0], ext[k:])
+        hit = (pf, _with_extra(prob, prob.s, pf), basis_v)
         if len(cache) >= _BASIS_CACHE:
             del cache[next(iter(cache))]
         cache[key] = hit
@@ -366,7 +381,7 @@ def _scaled_lstsq(
     n_c = a.shape[1]
     if ridge > 0 and n_c:
         mu = ridge * (float(np.linalg.norm(b)) if b_norm is None else b_norm) / np.sqrt(n_c)
-        an = np.zeros((a.shape[0] + n_c, n_c))
+        an = np.zeros((a.shape[0] + n_c, n_c), order="F")  # LAPACK's layout
         np.divide(a, norms, out=an[: a.shape[0]])
         an[np.arange(a.shape[0], a.shape[0] + n_c), np.arange(n_c)] = mu
         b_ext = np.zeros((a.shape[0] + n_c, *b.shape[1:]))
@@ -443,6 +458,27 @@ def _residue_system(
         phi0[n] = 0.0  # the D column itself is eliminated
         basis = basis - phi0[None, :]
         basis[:, n] = 0.0
+    n_c = basis.shape[1]
+    k_f = prob.n_freq
+    if dc is None and prob.w.shape[1] == 1:
+        # the weighted real rows [Re; Im] * w, then those of the anchors, written in place
+        keep = list(range(n_c))
+        basis_v = None
+        if prob.anchors is not None:
+            hit = prob._bases.get(reps.tobytes())
+            basis_v = hit[2] if hit is not None else None
+            if basis_v is None:
+                s_v = prob.anchors[0]
+                basis_v = _with_extra(prob, s_v, partial_fractions(s_v, reps))
+        n_v = 0 if basis_v is None else basis_v.shape[0]
+        aw = np.empty((2 * (k_f + n_v), n_c))
+        np.multiply(basis.real, prob.w, out=aw[:k_f])
+        np.multiply(basis.imag, prob.w, out=aw[k_f : 2 * k_f])
+        if basis_v is not None and prob.anchors is not None:
+            wgt = prob.anchors[2]
+            np.multiply(wgt, basis_v.real, out=aw[2 * k_f : 2 * k_f + n_v])
+            np.multiply(wgt, basis_v.imag, out=aw[2 * k_f + n_v :])
+        return _ResidueSystem(aw, b, keep, h0, phi0)
     a = _realify(basis)  # (2K, Nc)
     w2 = prob.w2  # (2K, Mw)
     if dc is None:
@@ -455,7 +491,10 @@ def _residue_system(
         aw = a_keep * w2
         if prob.anchors is not None:
             s_v, _, wgt = prob.anchors
-            basis_v = _with_extra(prob, s_v, partial_fractions(s_v, reps))
+            hit = prob._bases.get(reps.tobytes())
+            basis_v = hit[2] if hit is not None else None
+            if basis_v is None:
+                basis_v = _with_extra(prob, s_v, partial_fractions(s_v, reps))
             if phi0 is not None:
                 basis_v = basis_v - phi0[None, :]
                 basis_v[:, n] = 0.0
