@@ -188,13 +188,25 @@ def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitRepo
     )
 
 
-def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitReport:
-    """Add a note when the automatic order stopped far above the noise floor, saying why."""
+def _far_from_floor(
+    report: FitReport, fd: FrequencyData, limit: int, hit_max: bool = False
+) -> FitReport:
+    """Add a note when the automatic order stopped far above the noise floor (or without
+    one: ``noise_floor`` None), saying why."""
     floor = report.noise_floor or 0.0
     err = report.weighted_rel_rms_error
     if err <= _FAR * max(floor, 1e-9) or err < 1e-3:
         return report
     why = []
+    step, entry = _phase_step(fd)
+    if step > _COARSE_STEP:
+        why.append(
+            f"the data are sampled too coarsely for the response: the phase of {entry} "
+            f"advances by {step:.2g} rad per sample (median; about {2 * np.pi / step:.0f} "
+            "samples per turn), so the response between samples is undetermined (a long "
+            "delay, e.g. the cables of a raw measurement: de-embed it, or measure with a "
+            "finer frequency step)"
+        )
     turns = _phase_turns(fd)
     if turns > _DELAY_TURNS:
         why.append(
@@ -202,15 +214,42 @@ def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitRepo
             f"{turns / max(fd.freq_hz[-1] - fd.freq_hz[0], 1e-300):.3g} s), which costs "
             "about two poles per turn"
         )
-    if report.order >= limit - 1:
-        why.append(f"the order limit {limit} was reached (raise max_order)")
+    if hit_max or report.order >= limit - 1:
+        why.append(f"the order limit {limit} was reached (raise max_order; at most "
+                   f"{limit} poles for {fd.n_freq} samples)" if limit < 200 else
+                   f"the order limit {limit} was reached (raise max_order)")
     if not why:
         why.append("adding poles stopped improving the fit (noisy or non-rational data)")
-    note = (
-        f"the fit error {err:.3g} stays far above the estimated noise floor {floor:.3g} "
-        f"at order {report.order}: " + "; ".join(why)
-    )
+    if report.noise_floor is None:
+        head = (f"the fit error {err:.3g} at order {report.order} is large and the data's "
+                "noise floor could not be estimated (adjacent samples differ as much as "
+                "the data)")
+    else:
+        head = (f"the fit error {err:.3g} stays far above the estimated noise floor "
+                f"{floor:.3g} at order {report.order}")
+    note = head + ": " + "; ".join(why)
     return replace(report, notes=(*report.notes, note))
+
+
+_COARSE_STEP = 0.5  # rad of phase per sample (median) above which the data are too coarse
+
+
+def _phase_step(fd: FrequencyData) -> tuple[float, str]:
+    """Largest median phase advance per sample (rad) among the entries carrying at least
+    1 % of the energy, and that entry's name (e.g. "S21")."""
+    h = fd.values.reshape(fd.n_freq, -1)
+    energy = np.sum(np.abs(h) ** 2, axis=0)
+    best, name = 0.0, ""
+    for j in np.flatnonzero(energy >= 1e-2 * energy.max()):
+        a, b = h[1:, j], h[:-1, j]
+        ok = (a != 0) & (b != 0)
+        if not np.any(ok):
+            continue
+        step = float(np.median(np.abs(np.angle(a[ok] / b[ok]))))
+        if step > best:
+            i, k = divmod(int(j), fd.n_in)
+            best, name = step, f"{fd.kind}{i + 1}{k + 1}"
+    return best, name
 
 
 def _make_report(
