@@ -39,9 +39,9 @@ def _gram_rows(gram: FloatArray) -> FloatArray:
     scaled = dsc[:, None] * gram * dsc[None, :]
     if not np.all(np.isfinite(scaled)):
         raise np.linalg.LinAlgError("non-finite Gram matrix")
-    lam, vec, info = _lapack.dsyevd(scaled, compute_v=1, lower=1)  # np.linalg.eigh's
-    if info != 0:
-        lam, vec = np.linalg.eigh(scaled)
+    # numpy's eigh (LAPACK's dsyevd called directly rounds differently, and the automatic
+    # order follows the rounding: mlin.s2p 22 -> 21 poles)
+    lam, vec = np.linalg.eigh(scaled)
     out: FloatArray = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
     return out
 
