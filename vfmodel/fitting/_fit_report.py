@@ -203,7 +203,7 @@ def _far_from_floor(
         why.append(
             f"the data are sampled too coarsely for the response: the phase of {entry} "
             f"advances by {step:.2g} rad per sample (median; about {2 * np.pi / step:.0f} "
-            "samples per turn), so the response between samples is undetermined (a long "
+            "samples per turn), so the response between samples is poorly determined (a long "
             "delay, e.g. the cables of a raw measurement: de-embed it, or measure with a "
             "finer frequency step)"
         )
@@ -231,7 +231,11 @@ def _far_from_floor(
     return replace(report, notes=(*report.notes, note))
 
 
-_COARSE_STEP = 0.5  # rad of phase per sample (median) above which the data are too coarse
+# rad of phase per sample (median) from which the data are too coarse for a rational fit
+# (about 6 samples per turn): scikit-rf's raw multiline-TRL and probe files turn 2.0-3.0
+# rad per sample; SignalIntegrity's raw VNA files DUTRaw, Thru12, Open1 0.57-0.64 fit to
+# 3.7e-3-0.33 at the order limit, vfbench's files at most 0.21
+_COARSE_STEP = 1.0
 
 
 def _phase_step(fd: FrequencyData) -> tuple[float, str]:
