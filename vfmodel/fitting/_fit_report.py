@@ -142,19 +142,25 @@ def _to_model(
     return RationalModel(poles=p_arr, residues=r_arr, d=d, e=e, kind=fd.kind, z0=fd.z0)
 
 
-def fit_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float, float]:
-    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4)."""
-    diff = model(fd.freq_hz) - fd.values
+def fit_errors(
+    model: RationalModel, fd: FrequencyData, values: NDArray[np.complex128] | None = None
+) -> tuple[float, float, float]:
+    """(rms_error, rel_rms_error, max_abs_error) of ``model`` against ``fd`` (CONTRACT 4);
+    ``values``: the model's response at ``fd.freq_hz`` if already evaluated."""
+    diff = (model(fd.freq_hz) if values is None else values) - fd.values
     rms = float(np.sqrt(np.mean(np.abs(diff) ** 2)))
     rel = float(np.linalg.norm(diff) / max(float(np.linalg.norm(fd.values)), 1e-300))
     return rms, rel, float(np.max(np.abs(diff)))
 
 
-def point_errors(model: RationalModel, fd: FrequencyData) -> tuple[float, float]:
+def point_errors(
+    model: RationalModel, fd: FrequencyData, values: NDArray[np.complex128] | None = None
+) -> tuple[float, float]:
     """(RMS, max) over frequency of the per-point relative error
     ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F (a zero sample counts against 1e-12
-    of the largest)."""
-    diff = np.linalg.norm((model(fd.freq_hz) - fd.values).reshape(fd.n_freq, -1), axis=1)
+    of the largest); ``values`` as for :func:`fit_errors`."""
+    hm = model(fd.freq_hz) if values is None else values
+    diff = np.linalg.norm((hm - fd.values).reshape(fd.n_freq, -1), axis=1)
     norm = np.linalg.norm(fd.values.reshape(fd.n_freq, -1), axis=1)
     norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
     e = diff / np.where(norm > 0, norm, 1.0)
@@ -182,13 +188,25 @@ def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitRepo
     )
 
 
-def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitReport:
-    """Add a note when the automatic order stopped far above the noise floor, saying why."""
+def _far_from_floor(
+    report: FitReport, fd: FrequencyData, limit: int, hit_max: bool = False
+) -> FitReport:
+    """Add a note when the automatic order stopped far above the noise floor (or without
+    one: ``noise_floor`` None), saying why."""
     floor = report.noise_floor or 0.0
     err = report.weighted_rel_rms_error
     if err <= _FAR * max(floor, 1e-9) or err < 1e-3:
         return report
     why = []
+    step, entry = _phase_step(fd)
+    if step > _COARSE_STEP:
+        why.append(
+            f"the data are sampled too coarsely for the response: the phase of {entry} "
+            f"advances by {step:.2g} rad per sample (median; about {2 * np.pi / step:.0f} "
+            "samples per turn), so the response between samples is poorly determined (a long "
+            "delay, e.g. the cables of a raw measurement: de-embed it, or measure with a "
+            "finer frequency step)"
+        )
     turns = _phase_turns(fd)
     if turns > _DELAY_TURNS:
         why.append(
@@ -196,15 +214,46 @@ def _far_from_floor(report: FitReport, fd: FrequencyData, limit: int) -> FitRepo
             f"{turns / max(fd.freq_hz[-1] - fd.freq_hz[0], 1e-300):.3g} s), which costs "
             "about two poles per turn"
         )
-    if report.order >= limit - 1:
-        why.append(f"the order limit {limit} was reached (raise max_order)")
+    if hit_max or report.order >= limit - 1:
+        why.append(f"the order limit {limit} was reached (raise max_order; at most "
+                   f"{limit} poles for {fd.n_freq} samples)" if limit < 200 else
+                   f"the order limit {limit} was reached (raise max_order)")
     if not why:
         why.append("adding poles stopped improving the fit (noisy or non-rational data)")
-    note = (
-        f"the fit error {err:.3g} stays far above the estimated noise floor {floor:.3g} "
-        f"at order {report.order}: " + "; ".join(why)
-    )
+    if report.noise_floor is None:
+        head = (f"the fit error {err:.3g} at order {report.order} is large and the data's "
+                "noise floor could not be estimated (adjacent samples differ as much as "
+                "the data)")
+    else:
+        head = (f"the fit error {err:.3g} stays far above the estimated noise floor "
+                f"{floor:.3g} at order {report.order}")
+    note = head + ": " + "; ".join(why)
     return replace(report, notes=(*report.notes, note))
+
+
+# rad of phase per sample (median) from which the data are too coarse for a rational fit
+# (about 6 samples per turn): scikit-rf's raw multiline-TRL and probe files turn 2.0-3.0
+# rad per sample; SignalIntegrity's raw VNA files DUTRaw, Thru12, Open1 0.57-0.64 fit to
+# 3.7e-3-0.33 at the order limit, vfbench's files at most 0.21
+_COARSE_STEP = 1.0
+
+
+def _phase_step(fd: FrequencyData) -> tuple[float, str]:
+    """Largest median phase advance per sample (rad) among the entries carrying at least
+    1 % of the energy, and that entry's name (e.g. "S21")."""
+    h = fd.values.reshape(fd.n_freq, -1)
+    energy = np.sum(np.abs(h) ** 2, axis=0)
+    best, name = 0.0, ""
+    for j in np.flatnonzero(energy >= 1e-2 * energy.max()):
+        a, b = h[1:, j], h[:-1, j]
+        ok = (a != 0) & (b != 0)
+        if not np.any(ok):
+            continue
+        step = float(np.median(np.abs(np.angle(a[ok] / b[ok]))))
+        if step > best:
+            i, k = divmod(int(j), fd.n_in)
+            best, name = step, f"{fd.kind}{i + 1}{k + 1}"
+    return best, name
 
 
 def _make_report(
@@ -219,8 +268,9 @@ def _make_report(
     history: tuple[_vf_core.IterationRecord, ...],
     wname: str,
 ) -> FitReport:
-    rms, rel, mx = fit_errors(model, fd)
-    prms, pmax = point_errors(model, fd)
+    hm = model(fd.freq_hz)
+    rms, rel, mx = fit_errors(model, fd, hm)
+    prms, pmax = point_errors(model, fd, hm)
     wrel = _vf_core.weighted_rel_rms(prob, _vf_core.evaluate(prob, coef))
     steps = tuple(
         FitStep(r.order, float(r.weighted_rel_rms), float(r.sigma_deviation)) for r in history

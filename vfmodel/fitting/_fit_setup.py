@@ -218,10 +218,7 @@ def _phase_turns(fd: FrequencyData) -> float:
     1 % of the energy: a long delay shows as many turns."""
     h = fd.values.reshape(fd.n_freq, -1)
     energy = np.sum(np.abs(h) ** 2, axis=0)
-    turns = 0.0
-    for j in np.flatnonzero(energy >= 1e-2 * energy.max()):
-        ph = np.unwrap(np.angle(h[:, j]))
-        turns = max(turns, float(abs(ph[-1] - ph[0]) / (2 * np.pi)))
-    return turns
+    ph = np.unwrap(np.angle(h[:, energy >= 1e-2 * energy.max()]), axis=0)
+    return float(np.max(np.abs(ph[-1] - ph[0]) / (2 * np.pi), initial=0.0))
 
 

@@ -5,6 +5,7 @@ the zeros of sigma as new poles, and the fixed-order iteration (notation and ref
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.linalg import lapack as _lapack
 
 from vfmodel.fitting._vf_core import (
@@ -20,6 +21,7 @@ from vfmodel.fitting._vf_core import (
     Problem,
     _realify,
     _scaled_lstsq,
+    bases,
     bound_real_poles,
     evaluate,
     full_basis,
@@ -37,6 +39,8 @@ def _gram_rows(gram: FloatArray) -> FloatArray:
     scaled = dsc[:, None] * gram * dsc[None, :]
     if not np.all(np.isfinite(scaled)):
         raise np.linalg.LinAlgError("non-finite Gram matrix")
+    # numpy's eigh (LAPACK's dsyevd called directly rounds differently, and the automatic
+    # order follows the rounding: mlin.s2p 22 -> 21 poles)
     lam, vec = np.linalg.eigh(scaled)
     out: FloatArray = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
     return out
@@ -68,8 +72,10 @@ def _sigma_rows_common(
     """
     k_f, m = prob.n_freq, prob.n_resp
     n1 = basis_s.shape[1]
-    w = prob.w[:, 0]
-    q1 = _thin_q(_realify(basis_c * w[:, None]))  # (2K, Nc)
+    a1 = np.empty((2 * k_f, basis_c.shape[1]), order="F")  # [Re; Im] of W Phi_c
+    np.multiply(basis_c.real, prob.w, out=a1[:k_f])
+    np.multiply(basis_c.imag, prob.w, out=a1[k_f:])
+    q1 = _thin_q(a1)  # (2K, Nc)
     prod = prob.wh[:, :, None] * basis_s[:, None, :]  # (K, M, N+1)
     a2 = np.empty((2 * k_f, m, n1))
     np.negative(prod.real, out=a2[:k_f])
@@ -83,7 +89,7 @@ def _sigma_rows_common(
         proj = a2.reshape(-1, n1)
         return _gram_rows(proj.T @ proj)
     # sum_i a2_i^T a2_i = Re(Phi_s^H diag(sum_i |w h_i|^2) Phi_s)
-    power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
+    power = prob.power  # (K,)
     gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
     bflat = bq.reshape(-1, n1)
     try:
@@ -107,7 +113,7 @@ def _sigma_rows_per_response(
     if precise:  # R22 blocks of the QR of the projected systems, stacked
         r22: FloatArray = np.asarray(np.linalg.qr(a2 - q1 @ bq, mode="r"))
         return r22.reshape(-1, n1)
-    power = np.sum(np.abs(prob.wh) ** 2, axis=1)  # (K,)
+    power = prob.power  # (K,)
     gram = (basis_s.conj().T @ (power[:, None] * basis_s)).real
     bflat = bq.reshape(-1, n1)
     try:
@@ -122,6 +128,7 @@ def relocate_poles(
     stable: bool = True,
     precise: bool = True,
     pf: ComplexArray | None = None,
+    basis: ComplexArray | None = None,
 ) -> tuple[ComplexArray, float]:
     """One relaxed pole-relocation step with the fast QR-reduced sigma system.
 
@@ -137,20 +144,23 @@ def relocate_poles(
     the QR-reduced rows.
 
     Returns the new representatives and max_k |sigma(s_k) - 1|. ``pf``: the partial
-    fractions of ``reps`` if already computed.
+    fractions of ``reps`` and ``basis`` their full basis, if already computed.
     """
     n = n_poles(reps)
     k_f = prob.n_freq
     if pf is None:
         pf = partial_fractions(prob.s, reps)  # (K, N)
-    basis_c = full_basis(prob, reps, pf)
-    basis_s = np.concatenate([pf, np.ones((k_f, 1), complex)], axis=1)  # (K, N+1)
+    basis_c = full_basis(prob, reps, pf) if basis is None else basis
+    if prob.fit_d and not prob.fit_e:  # [pf, 1]: the same columns
+        basis_s = basis_c
+    else:
+        basis_s = np.concatenate([pf, np.ones((k_f, 1), complex)], axis=1)  # (K, N+1)
     if prob.w.shape[1] == 1:
         rows = _sigma_rows_common(prob, basis_c, basis_s, precise)
     else:
         rows = _sigma_rows_per_response(prob, basis_c, basis_s, precise)
     # relaxation row, scaled like the data (Gustavsen 2006, eq. (9)-(10))
-    scale = float(np.linalg.norm(prob.wh)) / k_f
+    scale = prob.wh_norm / k_f
     relax = scale * np.sum(basis_s.real, axis=0)
     a = np.vstack([rows, relax[None, :]])
     b = np.zeros(a.shape[0])
@@ -165,17 +175,45 @@ def relocate_poles(
     deviation = float(np.max(np.abs(sigma / d_s - 1.0)))
     # zeros of sigma: eig(A - b c^T / d) in the real block form
     nr = reps.size - int(np.count_nonzero(reps.imag))
-    a_mat = np.zeros((n, n))
-    bvec = np.zeros(n)
-    a_mat[np.arange(nr), np.arange(nr)] = reps[:nr].real
-    bvec[:nr] = 1.0
-    i = nr + 2 * np.arange(reps.size - nr)
-    a_mat[i, i] = a_mat[i + 1, i + 1] = reps[nr:].real
-    a_mat[i, i + 1] = reps[nr:].imag
-    a_mat[i + 1, i] = -reps[nr:].imag
-    bvec[i] = 2.0
-    z = np.asarray(np.linalg.eigvals(a_mat - np.outer(bvec, c_s) / d_s), dtype=complex)
+    a_mat, bvec = _state_form(reps, nr)
+    a_mat -= np.outer(bvec, c_s) / d_s
+    # np.linalg.eigvals' LAPACK routine (geev), without its wrapper
+    wr, wi, _, _, info = _lapack.dgeev(a_mat, compute_vl=0, compute_vr=0)
+    if info != 0:
+        z = np.asarray(np.linalg.eigvals(a_mat), dtype=complex)
+    else:
+        z = wr + 1j * wi
     return reps_from_eigenvalues(z, stable), deviation
+
+
+_FORMS: dict[tuple[int, int], tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp],
+                                    FloatArray]] = {}
+
+
+def _state_form(reps: ComplexArray, nr: int) -> tuple[FloatArray, FloatArray]:
+    """Real block-diagonal A (n, n) of the representatives and the input vector b
+    (1 per real pole, [2, 0] per pair; shared, not to be modified)."""
+    key = (nr, reps.size - nr)
+    form = _FORMS.get(key)
+    if form is None:
+        n = nr + 2 * key[1]
+        i = nr + 2 * np.arange(key[1])
+        b = np.zeros(n)
+        b[:nr] = 1.0
+        b[i] = 2.0
+        # flat indices into A: the diagonal, the (i, i+1) and the (i+1, i) entries
+        form = (np.arange(n) * (n + 1), i * n + i + 1, (i + 1) * n + i, b)
+        _FORMS[key] = form
+    diag, up, low, bvec = form
+    n = bvec.size
+    a_mat = np.zeros(n * n)
+    re = np.empty(n)
+    re[:nr] = reps[:nr].real
+    re[nr::2] = re[nr + 1 :: 2] = reps[nr:].real
+    a_mat[diag] = re
+    a_mat[up] = reps[nr:].imag
+    a_mat[low] = -reps[nr:].imag
+    return a_mat.reshape(n, n), bvec
 
 
 def iterate(
@@ -212,15 +250,15 @@ def iterate(
     prev = np.inf
     converged = False
     it = it_best = 0
-    pf = partial_fractions(prob.s, reps)
+    pf, basis, _ = bases(prob, reps)
     last = err_hint
     for it in range(1, max_iterations + 1):
         exact_rows = precise if precise is not None else bool(last <= _GRAM_ERROR)
-        reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf)
+        reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf, basis)
         reps = bound_real_poles(reps, prob.pole_bounds)
-        pf = partial_fractions(prob.s, reps)
-        coef = solve_residues(prob, reps, pf)
-        err = weighted_rel_rms(prob, evaluate(prob, coef, pf))
+        pf, basis, _ = bases(prob, reps)
+        coef = solve_residues(prob, reps, pf, basis)
+        err = weighted_rel_rms(prob, evaluate(prob, coef, pf, basis))
         history.append(IterationRecord(n_poles(reps), err, dev))
         last = err
         if err < best_err:

@@ -28,6 +28,7 @@ Lett. 18(6), 2008. doi:10.1109/LMWC.2008.922585
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
@@ -101,11 +102,59 @@ class Problem:
     def n_resp(self) -> int:
         return int(self.h.shape[1])
 
-    @property
+    # derived arrays are computed once per problem (the fits call them in every
+    # relocation; ``dataclasses.replace`` gives a new problem with its own cache)
+    @cached_property
     def wh(self) -> ComplexArray:
         """Weighted responses (K, M)."""
         out: ComplexArray = self.w * self.h
         return out
+
+    @cached_property
+    def wh_norm(self) -> float:
+        """||W H||_F."""
+        return float(np.linalg.norm(self.wh))
+
+    @cached_property
+    def power(self) -> FloatArray:
+        """sum_i |w h_i|^2 per frequency (K,)."""
+        out: FloatArray = np.sum(np.abs(self.wh) ** 2, axis=1)
+        return out
+
+    @cached_property
+    def w2(self) -> FloatArray:
+        """Weights of the real-stacked rows (2K, Mw)."""
+        out: FloatArray = np.concatenate([self.w, self.w], axis=0)
+        return out
+
+    @cached_property
+    def _bases(self) -> dict[bytes, tuple[ComplexArray, ComplexArray, ComplexArray | None]]:
+        """Cache of :func:`bases`."""
+        return {}
+
+    @cached_property
+    def _s_all(self) -> ComplexArray:
+        """The sample frequencies, then those of the anchors (common weights only)."""
+        if self.w.shape[1] == 1 and self.anchors is not None:
+            return np.concatenate([self.s, self.anchors[0]])
+        return self.s
+
+    @cached_property
+    def _residue_rhs(self) -> tuple[FloatArray, FloatArray | None, float]:
+        """Right-hand side of the residue solve (rows of the samples, then of the
+        anchors), the 0 Hz value matched (or None) and the right-hand side's norm."""
+        h = self.h
+        h0 = None
+        if self.fit_d and self.dc_index is not None:
+            h0 = h[self.dc_index].real  # (M,)
+            h = h - h0[None, :]
+        b = _realify(h) * self.w2  # (2K, M)
+        if self.w.shape[1] == 1 and self.anchors is not None:
+            _, h_v, wgt = self.anchors
+            if h0 is not None:
+                h_v = h_v - h0[None, :]
+            b = np.vstack([b, wgt * _realify(h_v)])
+        return b, h0, float(np.linalg.norm(b))
 
     @property
     def n_extra(self) -> int:
@@ -154,27 +203,32 @@ def n_poles(reps: ComplexArray) -> int:
 def sort_reps(reps: ComplexArray) -> ComplexArray:
     """Real representatives first (by magnitude), then pairs by imaginary part."""
     reps = np.asarray(reps, dtype=complex)
-    real = np.sort(reps[reps.imag == 0].real)[::-1]
-    cplx = reps[reps.imag > 0]
-    cplx = cplx[np.argsort(cplx.imag)]
-    out: ComplexArray = np.concatenate([real.astype(complex), cplx])
+    im = reps.imag
+    real = np.sort(reps.real[im == 0])[::-1]
+    cplx = reps[im > 0]
+    out: ComplexArray = np.empty(real.size + cplx.size, dtype=complex)
+    out[: real.size] = real
+    out[real.size :] = cplx[np.argsort(cplx.imag)]
     return out
 
 
 def reps_from_eigenvalues(z: ComplexArray, stable: bool) -> ComplexArray:
     """Representatives from the eigenvalues of a real matrix (unstable ones flipped)."""
     z = np.asarray(z, dtype=complex)
-    mag = np.maximum(np.abs(z), _TINY)
-    is_real = np.abs(z.imag) <= 1e-12 * mag
-    real = z[is_real].real
-    cplx = z[~is_real & (z.imag > 0)]
+    im = z.imag
+    is_real = np.abs(im) <= 1e-12 * np.maximum(np.abs(z), _TINY)
+    real = z.real[is_real]
+    cplx = z[~is_real & (im > 0)]
     if stable:
         # Flip unstable poles into the left half plane; keep a tiny damping for poles on
         # the imaginary axis so that the model stays strictly stable.
         real = -np.maximum(np.abs(real), 1e-12)
         re = -np.maximum(np.abs(cplx.real), 1e-9 * np.abs(cplx))
         cplx = re + 1j * cplx.imag
-    return sort_reps(np.concatenate([real.astype(complex), cplx]))
+    out: ComplexArray = np.empty(real.size + cplx.size, dtype=complex)
+    out[: real.size] = np.sort(real)[::-1]
+    out[real.size :] = cplx[np.argsort(cplx.imag)]
+    return out
 
 
 def bound_real_poles(
@@ -230,16 +284,49 @@ def partial_fractions(s: ComplexArray, reps: ComplexArray) -> ComplexArray:
     return out
 
 
+def _with_extra(prob: Problem, s: ComplexArray, pf: ComplexArray) -> ComplexArray:
+    cols = [pf]
+    if prob.fit_d:
+        cols.append(np.ones((s.size, 1), complex))
+    if prob.fit_e:
+        cols.append(s[:, None])
+    return np.concatenate(cols, axis=1) if len(cols) > 1 else pf
+
+
+_BASIS_CACHE = 8  # bases of this many pole sets are kept per problem
+
+
+def bases(
+    prob: Problem, reps: ComplexArray
+) -> tuple[ComplexArray, ComplexArray, ComplexArray | None]:
+    """Partial fractions (K, N) and full basis (K, Nc) of ``reps`` at the problem's
+    frequencies and the full basis at the anchor frequencies (or None), kept for the last
+    few pole sets (the automatic order evaluates, prunes and ranks the same poles several
+    times). The arrays must not be modified."""
+    key = reps.tobytes()
+    cache = prob._bases
+    hit = cache.get(key)
+    if hit is None:
+        k = prob.n_freq
+        ext = partial_fractions(prob._s_all, reps)  # samples and anchors in one pass
+        pf = ext[:k]
+        basis_v = None
+        if ext.shape[0] > k and prob.anchors is not None:
+            basis_v = _with_extra(prob, prob.anchors[0], ext[k:])
+        hit = (pf, _with_extra(prob, prob.s, pf), basis_v)
+        if len(cache) >= _BASIS_CACHE:
+            del cache[next(iter(cache))]
+        cache[key] = hit
+    return hit
+
+
 def full_basis(
     prob: Problem, reps: ComplexArray, pf: ComplexArray | None = None
 ) -> ComplexArray:
     """Partial fractions (``pf`` if given) plus the fitted D (1) and E (s) columns: (K, Nc)."""
-    cols = [partial_fractions(prob.s, reps) if pf is None else pf]
-    if prob.fit_d:
-        cols.append(np.ones((prob.n_freq, 1), complex))
-    if prob.fit_e:
-        cols.append(prob.s[:, None])
-    return np.concatenate(cols, axis=1)
+    if pf is None:
+        return bases(prob, reps)[1]
+    return _with_extra(prob, prob.s, pf)
 
 
 def _realify(a: ComplexArray) -> FloatArray:
@@ -249,10 +336,15 @@ def _realify(a: ComplexArray) -> FloatArray:
 
 
 def evaluate(
-    prob: Problem, coef: Coefficients, pf: ComplexArray | None = None
+    prob: Problem,
+    coef: Coefficients,
+    pf: ComplexArray | None = None,
+    basis: ComplexArray | None = None,
 ) -> ComplexArray:
-    """Model responses (K, M) at the problem's frequencies (``pf``: partial fractions)."""
-    basis = full_basis(prob, coef.reps, pf)
+    """Model responses (K, M) at the problem's frequencies (``pf``: partial fractions,
+    ``basis``: the full basis of ``coef.reps``, if already computed)."""
+    if basis is None:
+        basis = full_basis(prob, coef.reps, pf)
     x = [coef.c]
     if prob.fit_d:
         x.append(coef.d[:, None])
@@ -265,39 +357,48 @@ def evaluate(
 def weighted_rel_rms(prob: Problem, model: ComplexArray) -> float:
     """||W (H_model - H)||_F / ||W H||_F."""
     num = np.linalg.norm(prob.w * (model - prob.h))
-    den = max(float(np.linalg.norm(prob.wh)), _TINY)
+    den = max(prob.wh_norm, _TINY)
     return float(num / den)
 
 
 # ---------------------------------------------------------------------- solves
-def _scaled_lstsq(a: FloatArray, b: FloatArray, ridge: float = 0.0) -> FloatArray:
+def _scaled_lstsq(
+    a: FloatArray, b: FloatArray, ridge: float = 0.0, b_norm: float | None = None
+) -> FloatArray:
     """Least squares with unit-norm column scaling (columns of zeros give zero).
 
     Householder QR and a triangular solve; the SVD solver (minimum-norm solution) only
     when the scaled matrix is numerically rank deficient. ``ridge`` > 0 appends the rows
-    ``ridge * ||b||_F / sqrt(n_cols) * I`` (Tikhonov) to the scaled system.
+    ``ridge * ||b||_F / sqrt(n_cols) * I`` (Tikhonov) to the scaled system (``b_norm``:
+    ||b||_F if known).
 
     The factorisation is called from LAPACK directly (geqrf, orgqr, trtrs: the routines
     behind numpy.linalg.qr and scipy's solve_triangular, in the same order): their
     wrappers cost more than the factorisation itself at the sizes of small fits.
     """
-    norms = np.linalg.norm(a, axis=0)
-    norms = np.where(norms > 0, norms, 1.0)
-    an = a / norms
-    n_c = an.shape[1]
+    norms = np.sqrt(np.add.reduce(a * a, axis=0))  # np.linalg.norm(a, axis=0)
+    norms[norms == 0] = 1.0
+    n_c = a.shape[1]
     if ridge > 0 and n_c:
-        mu = ridge * float(np.linalg.norm(b)) / np.sqrt(n_c)
-        an = np.vstack([an, mu * np.eye(n_c)])
-        b = np.concatenate([b, np.zeros((n_c, *b.shape[1:]))], axis=0)
+        mu = ridge * (float(np.linalg.norm(b)) if b_norm is None else b_norm) / np.sqrt(n_c)
+        an = np.zeros((a.shape[0] + n_c, n_c), order="F")  # LAPACK's layout
+        np.divide(a, norms, out=an[: a.shape[0]])
+        an[np.arange(a.shape[0], a.shape[0] + n_c), np.arange(n_c)] = mu
+        b_ext = np.zeros((a.shape[0] + n_c, *b.shape[1:]))
+        b_ext[: a.shape[0]] = b
+        b = b_ext
+    else:
+        an = a / norms
     if an.shape[0] >= n_c > 0 and n_c < _DIRECT_COLUMNS:
         qr_, tau, _, info = _lapack.dgeqrf(an)
-        diag = np.abs(np.diagonal(qr_)[:n_c])
+        diag = np.abs(qr_.diagonal())
         if info == 0 and diag.min() > _RANK_TOL * diag.max():
             q, _, info_q = _lapack.dorgqr(qr_[:, :n_c], tau, max(1, 64 * n_c))
-            # C-ordered Q and R and the transposed triangular solve, as numpy and scipy
-            # lay them out (the same rounding: the automatic order follows it)
+            # C-ordered Q and the transposed triangular solve, as numpy and scipy lay
+            # them out (the same rounding: the automatic order follows it); trtrs reads
+            # only the upper triangle of R (the lower one of R^T)
             q = np.ascontiguousarray(q)
-            r = np.ascontiguousarray(np.triu(qr_[:n_c]))
+            r = np.ascontiguousarray(qr_[:n_c])
             x, info_t = _lapack.dtrtrs(r.T, q.T @ b, lower=1, trans=1)
             if info_q == 0 and info_t == 0:
                 out: FloatArray = (np.asarray(x, dtype=float).T / norms).T
@@ -340,69 +441,100 @@ class _ResidueSystem:
     phi0: FloatArray | None
 
 
-def _residue_system(prob: Problem, reps: ComplexArray, pf: ComplexArray | None) -> _ResidueSystem:
+def _residue_system(
+    prob: Problem,
+    reps: ComplexArray,
+    pf: ComplexArray | None,
+    basis: ComplexArray | None = None,
+) -> _ResidueSystem:
     n = n_poles(reps)
-    basis = full_basis(prob, reps, pf)  # (K, Nc)
-    h = prob.h
+    if basis is None:
+        basis = full_basis(prob, reps, pf)  # (K, Nc)
     dc = prob.dc_index if prob.fit_d else None
-    h0 = phi0 = None
+    b, h0, _ = prob._residue_rhs
+    phi0 = None
     if dc is not None:
-        h0 = h[dc].real  # (M,)
         phi0 = basis[dc].real.copy()
         phi0[n] = 0.0  # the D column itself is eliminated
         basis = basis - phi0[None, :]
         basis[:, n] = 0.0
-        h = h - h0[None, :]
-    a = _realify(basis)  # (2K, Nc)
-    w2 = np.concatenate([prob.w, prob.w], axis=0)  # (2K, Mw)
-    b = _realify(h) * w2  # (2K, M)
-    keep = [j for j in range(a.shape[1]) if dc is None or j != n]
-    if prob.w.shape[1] == 1:
-        aw = a[:, keep] * w2
+    n_c = basis.shape[1]
+    k_f = prob.n_freq
+    if dc is None and prob.w.shape[1] == 1:
+        # the weighted real rows [Re; Im] * w, then those of the anchors, written in place
+        keep = list(range(n_c))
+        basis_v = None
         if prob.anchors is not None:
-            s_v, h_v, wgt = prob.anchors
-            pf_v = partial_fractions(s_v, reps)
-            cols = [pf_v]
-            if prob.fit_d:
-                cols.append(np.ones((s_v.size, 1), complex))
-            if prob.fit_e:
-                cols.append(s_v[:, None])
-            basis_v = np.concatenate(cols, axis=1)
-            if phi0 is not None and h0 is not None:
+            hit = prob._bases.get(reps.tobytes())
+            basis_v = hit[2] if hit is not None else None
+            if basis_v is None:
+                s_v = prob.anchors[0]
+                basis_v = _with_extra(prob, s_v, partial_fractions(s_v, reps))
+        n_v = 0 if basis_v is None else basis_v.shape[0]
+        aw = np.empty((2 * (k_f + n_v), n_c))
+        np.multiply(basis.real, prob.w, out=aw[:k_f])
+        np.multiply(basis.imag, prob.w, out=aw[k_f : 2 * k_f])
+        if basis_v is not None and prob.anchors is not None:
+            wgt = prob.anchors[2]
+            np.multiply(wgt, basis_v.real, out=aw[2 * k_f : 2 * k_f + n_v])
+            np.multiply(wgt, basis_v.imag, out=aw[2 * k_f + n_v :])
+        return _ResidueSystem(aw, b, keep, h0, phi0)
+    a = _realify(basis)  # (2K, Nc)
+    w2 = prob.w2  # (2K, Mw)
+    if dc is None:
+        keep = list(range(a.shape[1]))
+        a_keep = a
+    else:
+        keep = [j for j in range(a.shape[1]) if j != n]
+        a_keep = a[:, keep]
+    if prob.w.shape[1] == 1:
+        aw = a_keep * w2
+        if prob.anchors is not None:
+            s_v, _, wgt = prob.anchors
+            hit = prob._bases.get(reps.tobytes())
+            basis_v = hit[2] if hit is not None else None
+            if basis_v is None:
+                basis_v = _with_extra(prob, s_v, partial_fractions(s_v, reps))
+            if phi0 is not None:
                 basis_v = basis_v - phi0[None, :]
                 basis_v[:, n] = 0.0
-                h_v = h_v - h0[None, :]
-            aw = np.vstack([aw, wgt * _realify(basis_v)[:, keep]])
-            b = np.vstack([b, wgt * _realify(h_v)])
+            a_v = _realify(basis_v)
+            aw = np.vstack([aw, wgt * (a_v if dc is None else a_v[:, keep])])
     else:
-        aw = a[None, :, keep] * w2.T[:, :, None]  # (M, 2K, Nk)
+        aw = a_keep[None, :, :] * w2.T[:, :, None]  # (M, 2K, Nk)
     return _ResidueSystem(aw, b, keep, h0, phi0)
 
 
 def solve_residues(
-    prob: Problem, reps: ComplexArray, pf: ComplexArray | None = None
+    prob: Problem,
+    reps: ComplexArray,
+    pf: ComplexArray | None = None,
+    basis: ComplexArray | None = None,
 ) -> Coefficients:
     """Coefficients (C, D, E) of every response for fixed poles, in one batched solve.
 
     With a 0 Hz sample and ``fit_d`` the model matches Re H(0) exactly: D is eliminated by
     the constraint ``D = H(0) - phi(0) c`` before the least-squares solve. ``pf``: the
-    partial fractions of ``reps`` if already computed.
+    partial fractions of ``reps``, ``basis`` their full basis, if already computed.
     """
     n = n_poles(reps)
-    sys_ = _residue_system(prob, reps, pf)
+    sys_ = _residue_system(prob, reps, pf, basis)
     if sys_.a.ndim == 2:
-        x_keep = _scaled_lstsq(sys_.a, sys_.b, prob.ridge)  # (Nk, M)
+        x_keep = _scaled_lstsq(sys_.a, sys_.b, prob.ridge, prob._residue_rhs[2])  # (Nk, M)
     else:
         x_keep = _batched_scaled_lstsq(sys_.a, sys_.b.T).T
-    x = np.zeros((n + prob.n_extra, prob.n_resp))
-    x[sys_.keep] = x_keep
+    if sys_.h0 is None:
+        x = x_keep
+    else:
+        x = np.zeros((n + prob.n_extra, prob.n_resp))
+        x[sys_.keep] = x_keep
     if sys_.h0 is not None and sys_.phi0 is not None:
         phi0 = sys_.phi0
         x[n] = sys_.h0 - phi0[:n] @ x[:n] - (phi0[n + 1 :] @ x[n + 1 :] if prob.fit_e else 0.0)
     m = prob.n_resp
-    d = x[n] if prob.fit_d else np.zeros(m)
-    e = x[n + int(prob.fit_d)] if prob.fit_e else np.zeros(m)
-    return Coefficients(reps=reps, c=x[:n].T.copy(), d=np.asarray(d), e=np.asarray(e))
+    d = x[n].copy() if prob.fit_d else np.zeros(m)
+    e = x[n + int(prob.fit_d)].copy() if prob.fit_e else np.zeros(m)
+    return Coefficients(reps=reps, c=x[:n].T.copy(), d=d, e=e)
 
 
 def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
@@ -421,10 +553,21 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
     b = sys_.b.T[:, :, None] if sys_.a.ndim == 3 else sys_.b[None]  # (Mw, 2K, M or 1)
     norms = np.linalg.norm(a, axis=1, keepdims=True)
     norms = np.where(norms > 0, norms, 1.0)
-    q, r = np.linalg.qr(a / norms)
-    nk = r.shape[-1]
+    nk = a.shape[-1]
     with np.errstate(all="ignore"):
-        rinv = np.linalg.solve(r, np.broadcast_to(np.eye(nk), r.shape))
+        rinv = None
+        if a.shape[0] == 1 and a.shape[1] >= nk > 0 and nk < _DIRECT_COLUMNS:
+            # common weights: LAPACK directly (geqrf, orgqr, trtri; the wrappers of
+            # numpy's batched qr and solve cost more than the work at these sizes)
+            qr_, tau, _, info = _lapack.dgeqrf(a[0] / norms[0])
+            q2, _, info_q = _lapack.dorgqr(qr_[:, :nk], tau, max(1, 64 * nk))
+            ri, info_t = _lapack.dtrtri(np.triu(qr_[:nk]), lower=0)
+            if info == 0 and info_q == 0 and info_t == 0:
+                rinv = ri[None]
+                q = q2[None]
+        if rinv is None:
+            q, r = np.linalg.qr(a / norms)
+            rinv = np.linalg.solve(r, np.broadcast_to(np.eye(nk), r.shape))
         x = rinv @ (np.swapaxes(q, 1, 2) @ b)  # (Mw, Nk, M or 1), scaled coordinates
         s_mat = rinv @ np.swapaxes(rinv, 1, 2)  # (Mw, Nk, Nk)
         nr = reps.size - int(np.count_nonzero(reps.imag))
@@ -452,7 +595,7 @@ def pole_contributions(prob: Problem, coef: Coefficients) -> FloatArray:
     ``sum_k,i |w_ki (pf_k1 c_i1 + pf_k2 c_i2)|^2`` from the weighted Gram entries of the
     basis columns of each representative (no (K, N, M) intermediate).
     """
-    pf = partial_fractions(prob.s, coef.reps)  # (K, N)
+    pf = bases(prob, coef.reps)[0]  # (K, N)
     nr = coef.reps.size - int(np.count_nonzero(coef.reps.imag))
     w2t = (prob.w**2).T  # (Mw, K)
     diag = w2t @ (pf.real**2 + pf.imag**2)  # (Mw, N)

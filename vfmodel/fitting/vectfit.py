@@ -260,7 +260,7 @@ def vector_fit(
             min_order=min(cap, int(2 * _phase_turns(fd)) + 4),
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
-        reason, noise = auto.reason, auto.noise_floor
+        reason, noise, hit_max = auto.reason, auto.noise_floor, auto.hit_max
     else:
         if isinstance(order, bool) or not isinstance(order, int | np.integer):
             raise InputError("order must be a positive integer or 'auto'", found=repr(order))
@@ -297,7 +297,7 @@ def vector_fit(
         model, fd, prob, coef, n_it, converged, reason, noise, history, wname
     )
     if order == "auto":
-        report = _far_from_floor(report, fd, limit=cap)
+        report = _far_from_floor(report, fd, limit=cap, hit_max=hit_max)
     for note in report.notes:
         warnings.warn(note, FitWarning, stacklevel=2)
     if not converged:
