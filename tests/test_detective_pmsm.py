@@ -150,16 +150,21 @@ def test_analytic_jacobian_matches_central_differences(
 
 def test_terms_side_by_side_equal_the_sequence(
         null: DiagnoseResult, monkeypatch: pytest.MonkeyPatch) -> None:
-    """An evaluation with the family's terms in two worker processes gives the residual and
-    Jacobian of the evaluation in sequence (the same arithmetic per term; compared to 1e-12
-    of the largest entry), and each record term's memo then holds the workers' transfer
-    (the next call at that point is a memo hit: the very same array comes back)."""
+    """An evaluation with the family's terms in two persistent worker processes (its
+    evaluation pool, as a refit opens it) gives the residual and Jacobian of the evaluation
+    in sequence (the same arithmetic per term; compared to 1e-12 of the largest entry), and
+    each record term's memo then holds the workers' transfer (the next call at that point
+    is a memo hit: the very same array comes back); the pool is closed after the block."""
     fam = null.family
     p0 = null.diagnosis.final.params
     names = fam.free_names((), p0)
     q = p0.with_values({names[0]: p0[names[0]] * 1.01})      # a point no memo holds
     monkeypatch.setenv("VFMODEL_WORKERS", "2")
-    r2, j2 = fam.residual_jacobian((), q, names)  # type: ignore[attr-defined]
+    with fam.evaluation_pool((), q):  # type: ignore[attr-defined]
+        assert fam._pools  # type: ignore[attr-defined]
+        fam.residual((), q)  # type: ignore[attr-defined]
+        r2, j2 = fam.residual_jacobian((), q, names)  # type: ignore[attr-defined]
+    assert not fam._pools  # type: ignore[attr-defined]
     _, bts = fam._terms((), q)  # type: ignore[attr-defined]
     for bt, prep in zip(bts, fam.preps, strict=True):  # type: ignore[attr-defined]
         entry = bt._memo.entry()

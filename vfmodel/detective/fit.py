@@ -21,6 +21,7 @@ doi:10.1137/S1064827595289108
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -145,16 +146,19 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
             cols.append((fun(x1) - r0) / h)
         return np.stack(cols, axis=1) if cols else np.zeros((r0.size, 0))
 
-    if names:
-        res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-8, ftol=1e-8,
-                      x_scale="jac")
-        x = res.x
-        jm = jac(x)
-    else:
-        x = x0
-        jm = np.zeros((fun(x0).size, 0))
-    p = params.from_log(x, names)
-    r_all = evaluate(family, applied, p)
+    # a family that can run its terms side by side keeps worker processes for the fit
+    opener = getattr(family, "evaluation_pool", None)
+    with opener(applied, params, names) if opener is not None else nullcontext():
+        if names:
+            res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-8, ftol=1e-8,
+                          x_scale="jac")
+            x = res.x
+            jm = jac(x)
+        else:
+            x = x0
+            jm = np.zeros((fun(x0).size, 0))
+        p = params.from_log(x, names)
+        r_all = evaluate(family, applied, p)
     r = r_all[sel]
     std, corr = _covariance(jm)
     return FitResult(applied, p, names, r_all, float(r @ r), int(r.size),

@@ -34,9 +34,10 @@ Jacobians are analytic (adjoint MNA sensitivities chained through the H1 estimat
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from functools import partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,7 +46,7 @@ from vfmodel._choices import BearingState
 from vfmodel.circuit.poles import network_poles
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
-from vfmodel.core.parallel import parallel_map
+from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
@@ -132,6 +133,8 @@ class PmsmFamily:
     _names: dict[frozenset[str], tuple[str, ...]] = field(default_factory=dict, repr=False)
     _lmaps: dict[tuple[frozenset[str], tuple[str, ...]], LogMap] = field(default_factory=dict,
                                                                          repr=False)
+    # evaluation pools open now (evaluation_pool), per structure
+    _pools: dict[frozenset[str], JobPool[Any]] = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------ protocol
     @property
@@ -228,18 +231,17 @@ class PmsmFamily:
                   names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
         imp, bts = self._terms(applied, params)
         jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
-        part = partial(self._part, applied, params, names)
-        if names is not None:
-            for k in jobs:               # log maps made here, inherited by the workers
-                self._part_names(applied, params, names, k)
-        # the record transfers (eigenvalues, ~50 ms each) and Jacobians (adjoint solves on
-        # ~350 frequencies, ~0.1 s each) dominate an evaluation: one job per term, side by
-        # side in forked workers; a worker's transfer comes back to the term's memo here,
-        # where the Jacobian at the same point (or a figure) asks for it again
-        parts = parallel_map(lambda i, _prog: part(jobs[i]), len(jobs))
-        for k, pr in zip(jobs, parts, strict=True):
-            if k >= 0 and pr[2] is not None:
-                bts[k]._memo.restore(pr[2])
+        pool = self._pools.get(_structure(self.base_effects, applied))
+        if pool is not None:
+            # the record transfers (eigenvalues, ~50 ms each) and Jacobians (adjoint solves
+            # on ~350 frequencies, ~0.1 s each) dominate an evaluation: the terms run side
+            # by side in the pool's workers; their transfers come back to the memos here
+            parts = pool.map((params, names))
+            for k, pr in zip(jobs, parts, strict=True):
+                if k >= 0 and pr[2] is not None:
+                    bts[k]._memo.restore(pr[2])
+        else:
+            parts = [self._part(applied, params, names, k) for k in jobs]
         rs = [r for pr in parts for r in pr[0]]
         js = [j for pr in parts for j in pr[1]]
         for port in self.ports:         # further impedances (Shaft-Frame): small, here
@@ -249,6 +251,39 @@ class PmsmFamily:
                 assert jm is not None
                 js.append(jm)
         return np.concatenate(rs), (np.concatenate(js) if names is not None else None)
+
+    @contextmanager
+    def evaluation_pool(self, applied: Sequence[Candidate], params: ParamSet,
+                        names: Sequence[str] = ()) -> Iterator[None]:
+        """Within the block, evaluations of the network ``applied`` run their terms (the
+        impedances, each record) in persistent worker processes (:class:`JobPool`: forked
+        once, each term always in the same worker). The terms and the log maps of
+        ``names`` (the fitted parameters) are made here first, at ``params``, so that the
+        workers inherit them and every fit uses the maps of the first one (as in
+        sequence)."""
+        key = _structure(self.base_effects, applied)
+        imp, bts = self._terms(applied, params)
+        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        if names:
+            for k in jobs:
+                self._part_names(applied, params, tuple(names), k)
+        if key in self._pools or len(jobs) < 2:
+            yield
+            return
+
+        def job(i: int, arg: tuple[ParamSet, tuple[str, ...] | None]
+                ) -> tuple[list[ArrF], list[ArrF], tuple[bytes, ArrC] | None]:
+            return self._part(applied, arg[0], arg[1], jobs[i])
+
+        with JobPool(job, len(jobs)) as pool:
+            if not pool.processes:
+                yield
+                return
+            self._pools[key] = pool
+            try:
+                yield
+            finally:
+                del self._pools[key]
 
     def _part_names(self, applied: Sequence[Candidate], params: ParamSet,
                     names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
