@@ -8,6 +8,11 @@
    parameters with the others fixed, then a full warm-started refit) and compare by
    ``Delta BIC = Delta chi2 + Delta k ln m`` (Schwarz 1978) and by held-out points: both
    networks are refitted on the even points of every channel and scored on the odd ones.
+   The base network is refitted beside the candidates with a candidate's budget (the
+   control); when that lowers its chi-square the candidates are measured against the
+   control, so that no candidate wins by the extra iterations of its refit alone (a base
+   fit that had not converged let both remaining candidates of a concealed case gain
+   Delta chi2 -172, and the decoy was accepted).
 4. Accept the best candidate when a mismatch remains, ``Delta BIC < -bic_min``, and the
    held-out chi-square falls by more than its number of new parameters; a second candidate
    whose ``Delta BIC`` is within ``ambiguity`` of the best explains the data equally well:
@@ -167,13 +172,16 @@ def _odd_chi2(family: Family, fit: FitResult) -> float:
 
 def _round_job(i: int, prog: Progress, *, family: Family, base: FitResult,
                cands: tuple[Candidate, ...], max_nfev: int, heldout_nfev: int,
-               stage: str) -> FitResult | Trial:
-    """Job ``i`` of a round (:func:`vfmodel.core.parallel.parallel_map`): 0 is the base
-    network's fit on the even points (the held-out reference every candidate is compared
-    with), ``i >= 1`` candidate ``i - 1`` (its held-out chi-square alone)."""
+               stage: str) -> tuple[FitResult, FitResult] | Trial:
+    """Job ``i`` of a round (:func:`vfmodel.core.parallel.parallel_map`): 0 is the control,
+    the base network refitted with a candidate's budget (no new effect), and the fit of the
+    better of it and the base on the even points (the held-out reference every candidate is
+    compared with); ``i >= 1`` candidate ``i - 1`` (its held-out chi-square alone)."""
     if i == 0:
-        return refit(family, base.applied, base.params, rows=_rows(family, 0),
-                     max_nfev=heldout_nfev)
+        ctrl = refit(family, base.applied, base.params, max_nfev=max_nfev)
+        ref = ctrl if ctrl.chi2 < base.chi2 else base
+        return ctrl, refit(family, base.applied, ref.params, rows=_rows(family, 0),
+                           max_nfev=heldout_nfev)
     prog(stage, i - 1, len(cands))
     return _try(family, base, cands[i - 1], max_nfev, None, heldout_nfev)
 
@@ -257,12 +265,6 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
     last: dict[tuple[str, str], Trial] = {}
     rounds: list[tuple[Trial, ...]] = []
     while remaining:
-        if not rounds:
-            # polish the start with the same budget a candidate's refit gets, so that a
-            # candidate cannot win by extra iterations alone
-            pol = refit(family, cur.applied, cur.params, max_nfev=max_nfev)
-            if pol.chi2 < cur.chi2:
-                cur = start = pol
         h_nfev = max_nfev if heldout_nfev is None else heldout_nfev
         stage = f"candidates, round {len(rounds) + 1}"
         # the candidates of a round and the base's even-point fit they are compared with on
@@ -277,10 +279,18 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             # (a family's own parallel evaluation, e.g. PmsmFamily._residual)
             out = [job(k, progress) for k in range(2)]
         progress(stage, len(remaining), len(remaining))
-        base_even = out[0]
-        assert isinstance(base_even, FitResult)
+        assert isinstance(out[0], tuple)
+        ctrl, base_even = out[0]
+        if ctrl.chi2 < cur.chi2:
+            # the base refitted with a candidate's budget is better than the base: the
+            # candidates are measured against it, so that none wins by iterations alone
+            cur = ctrl
+            cur_mism = locate(family.channels, cur.residual, alpha=alpha)
+            if not rounds:      # the first control is the start's polish
+                start = ctrl
         base_ho = _odd_chi2(family, base_even)
-        trials = [replace(t, heldout_delta_chi2=t.heldout_delta_chi2 - base_ho)
+        trials = [replace(t, delta_chi2=t.fit.chi2 - cur.chi2, delta_bic=t.fit.bic - cur.bic,
+                          heldout_delta_chi2=t.heldout_delta_chi2 - base_ho)
                   for t in out[1:] if isinstance(t, Trial)]
         rounds.append(tuple(trials))
         for t in trials:
