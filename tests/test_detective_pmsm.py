@@ -148,37 +148,6 @@ def test_analytic_jacobian_matches_central_differences(
         assert err <= 0.02 * big[i], (names[k], err / big[i])
 
 
-def test_terms_side_by_side_equal_the_sequence(
-        null: DiagnoseResult, monkeypatch: pytest.MonkeyPatch) -> None:
-    """An evaluation with the family's terms in two persistent worker processes (its
-    evaluation pool, as a refit opens it) gives the residual and Jacobian of the evaluation
-    in sequence (the same arithmetic per term; compared to 1e-12 of the largest entry), and
-    each record term's memo then holds the workers' transfer (the next call at that point
-    is a memo hit: the very same array comes back); the pool is closed after the block."""
-    fam = null.family
-    p0 = null.diagnosis.final.params
-    names = fam.free_names((), p0)
-    q = p0.with_values({names[0]: p0[names[0]] * 1.01})      # a point no memo holds
-    monkeypatch.setenv("VFMODEL_WORKERS", "2")
-    with fam.evaluation_pool((), q, names):  # type: ignore[attr-defined]
-        # under pytest-xdist (threads: no fork) the pool runs in sequence; the pool itself
-        # is tested in a fresh interpreter (tests/test_job_pool.py)
-        fam.residual((), q)  # type: ignore[attr-defined]
-        r2, j2 = fam.residual_jacobian((), q, names)  # type: ignore[attr-defined]
-    assert not fam._pools  # type: ignore[attr-defined]
-    _, bts = fam._terms((), q)  # type: ignore[attr-defined]
-    for bt, prep in zip(bts, fam.preps, strict=True):  # type: ignore[attr-defined]
-        entry = bt._memo.entry()
-        assert entry is not None
-        assert bt.transfer_bins(fam.at_speed(q, prep.speed_rpm)) is entry[1]  # type: ignore[attr-defined]
-    monkeypatch.setenv("VFMODEL_WORKERS", "1")
-    for bt in bts:
-        bt._memo._value = None                                # computed anew, in sequence
-    r1, j1 = fam.residual_jacobian((), q, names)  # type: ignore[attr-defined]
-    np.testing.assert_allclose(r2, r1, rtol=0, atol=1e-12 * np.abs(r1).max())
-    np.testing.assert_allclose(j2, j1, rtol=0, atol=1e-12 * np.abs(j1).max())
-
-
 def test_base_lubricant_does_not_act_while_turning(null: DiagnoseResult) -> None:
     """Without the metallic contact the standstill film is fitted too; at a rotating speed
     its per-speed copy replaces it, so its analytic Jacobian column is 0 on those records

@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -72,3 +73,50 @@ def test_job_pool_in_a_fresh_interpreter() -> None:
     assert out["seq_processes"] == 0
     assert [v for v, _, _ in out["seq"]] == [0, 1, 2]
     assert {pid for *_, pid in out["seq"]} == {parent}
+
+
+PMSM_SCRIPT = textwrap.dedent("""
+    import json, os, sys
+    sys.path.insert(0, {repo!r})
+    import numpy as np
+    from benches.small_dataset import make_small_dataset
+    from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.detective.pmsm import pmsm_family
+
+    fam = pmsm_family(read_dataset(make_small_dataset({root!r}, seed=1, n_samples=4096)))
+    p0 = fam.start_params()
+    names = fam.free_names((), p0)
+    q = p0.with_values({{names[0]: p0[names[0]] * 0.99}})      # a point no memo holds
+    os.environ["VFMODEL_WORKERS"] = "2"
+    with fam.evaluation_pool((), q, names):
+        procs = [pl.processes for pl in fam._pools.values()]
+        r2, j2 = fam.residual_jacobian((), q, names)
+    left = len(fam._pools)
+    _, bts = fam._terms((), q)
+    hit = all(bt.transfer_bins(fam.at_speed(q, pr.speed_rpm)) is bt._memo.entry()[1]
+              for bt, pr in zip(bts, fam.preps))
+    for bt in bts:
+        bt._memo._value = None                      # computed anew, in sequence
+    os.environ["VFMODEL_WORKERS"] = "1"
+    r1, j1 = fam.residual_jacobian((), q, names)
+    print(json.dumps({{"procs": procs, "left": left, "hit": hit,
+                      "dr": float(np.abs(r2 - r1).max() / np.abs(r1).max()),
+                      "dj": float(np.abs(j2 - j1).max() / np.abs(j1).max())}}))
+""")
+
+
+def test_pmsm_terms_in_the_pool_equal_the_sequence(tmp_path: Path) -> None:
+    """The PMSM family's evaluation pool (as a detective refit opens it) on the small
+    dataset: two worker processes, the residual and Jacobian of the evaluation in sequence
+    (the same arithmetic per term; to 1e-12 of the largest entry), each record term's memo
+    then holding the workers' transfer (a memo hit returns the very same array), and the
+    pool closed after the block."""
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("one usable core: the pool runs in sequence by design")
+    code = PMSM_SCRIPT.format(repo=str(REPO), root=str(tmp_path / "small"))
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=300, check=True)
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    assert out["procs"] == [2] and out["left"] == 0 and out["hit"]
+    assert out["dr"] <= 1e-12 and out["dj"] <= 1e-12

@@ -274,9 +274,9 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         if len(remaining) > 1:
             out = parallel_map(job, len(remaining) + 1, progress, [stage], len(remaining))
         else:
-            # one candidate: its long refit beside the short even-point fit would leave a
-            # core idle; in sequence here, each evaluation's terms run side by side instead
-            # (a family's own parallel evaluation, e.g. PmsmFamily._residual)
+            # one candidate: its long refit beside the control would leave a core idle at
+            # the end; in sequence here, each refit's terms run side by side instead (a
+            # family's evaluation_pool, e.g. PmsmFamily.evaluation_pool)
             out = [job(k, progress) for k in range(2)]
         progress(stage, len(remaining), len(remaining))
         assert isinstance(out[0], tuple)

@@ -50,7 +50,7 @@ from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
-from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm
+from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
 from vfmodel.greybox.effects import (
@@ -289,29 +289,13 @@ class PmsmFamily:
                     names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
         """Local parameter names of term ``k`` (-1: the impedances) and their columns;
         builds the term's log map."""
-        loc: list[str] = []
-        cols: list[int] = []
         if k < 0:
-            for j, n in enumerate(names):
-                if "@" not in n:
-                    loc.append(n)
-                    cols.append(j)
+            loc, cols = local_names(names, 0.0, params)
             if loc:
                 self._lmap(applied, params, loc)
             return loc, cols
         p = self.preps[k]
-        tag = speed_tag(p.speed_rpm)
-        for j, n in enumerate(names):
-            if "@" not in n:
-                # a base (standstill) lubricant value is replaced by its copy at this
-                # speed (at_speed): it does not act here
-                if p.speed_rpm > 0 and n + tag in params:
-                    continue
-                loc.append(n)
-                cols.append(j)
-            elif n.endswith(tag):
-                loc.append(n[: -len(tag)])
-                cols.append(j)
+        loc, cols = local_names(names, p.speed_rpm, params)
         if loc:
             self._lmap(applied, self.at_speed(params, p.speed_rpm), loc)
         return loc, cols

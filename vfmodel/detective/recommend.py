@@ -88,6 +88,7 @@ from numpy.typing import NDArray
 
 from vfmodel.detective.fit import FitResult, evaluate
 from vfmodel.detective.problem import Candidate
+from vfmodel.detective.shaft_frame import local_names
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
 from vfmodel.greybox.objective import dlogv_dlogp
 from vfmodel.greybox.params import ParamSet
@@ -182,16 +183,7 @@ def _dlnz_dlnp(family: Any, fit: Net, names: Sequence[str], rpm: float, freq: Ar
     spec = family.spec(fit.applied)
     state = family.state(rpm, fit.applied)
     ps = family.at_speed(fit.params, rpm)
-    tag = f"@{rpm:g}rpm"
-    over = {n[: -len(tag)] for n in names if rpm > 0 and n.endswith(tag)}
-    loc, cols = [], []
-    for j, n in enumerate(names):
-        if "@" not in n and n not in over:
-            loc.append(n)
-            cols.append(j)
-        elif rpm > 0 and n.endswith(tag):
-            loc.append(n[: -len(tag)])
-            cols.append(j)
+    loc, cols = local_names(names, rpm, fit.params)
     out = np.zeros((freq.size, len(names)), dtype=complex)
     if not loc:
         return out

@@ -33,15 +33,18 @@ ArrC = NDArray[np.complex128]
 SHAFT_FRAME = "Shaft-Frame"
 
 
-def local_names(names: Sequence[str], rpm: float) -> tuple[list[str], list[int]]:
-    """Names of the network at ``rpm`` and their columns in ``names``: base names, and at a
-    rotating speed the copies ``<name>@<rpm>rpm`` (as ``<name>``) instead of the base values
-    they replace; copies of other speeds do not act."""
+def local_names(names: Sequence[str], rpm: float, params: ParamSet
+                ) -> tuple[list[str], list[int]]:
+    """Names of the network at ``rpm`` and their columns in ``names``: the base names, and
+    at a rotating speed the copies ``<name>@<rpm>rpm`` (as ``<name>``); a base value whose
+    copy at ``rpm`` exists in ``params`` is replaced by it there (``PmsmFamily.at_speed``)
+    and does not act, fitted or not; copies of other speeds do not act."""
     tag = f"@{rpm:g}rpm"
-    over = {n[: -len(tag)] for n in names if rpm > 0 and n.endswith(tag)}
     loc, cols = [], []
     for j, n in enumerate(names):
-        if "@" not in n and n not in over:
+        if "@" not in n:
+            if rpm > 0 and n + tag in params:
+                continue
             loc.append(n)
             cols.append(j)
         elif rpm > 0 and n.endswith(tag):
@@ -84,7 +87,7 @@ class PortTerm:
         pair = (BEARING_NODE, "0")
         v = spec.values(ps, state)
         nf = self.freq_hz.size
-        loc, cols = local_names(names or (), self.speed_rpm)
+        loc, cols = local_names(names or (), self.speed_rpm, params)
         if names is None or not loc:
             z = np.asarray(mna.response(self.freq_hz, [pair], [pair], v)[:, 0, 0])
             jm = None if names is None else np.zeros((2 * nf, len(names)))

@@ -432,10 +432,9 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
     dl = (lmap.at(params) if lmap is not None
           else dlogv_dlogp(params, names, spec, state, sources=True))
     used = _used_elements(dl)
-    pos = None if lowrank is None else np.searchsorted(lowrank.moving, used)
-    if lowrank is not None and pos is not None and lowrank.applies(v, prep.bins_hz) \
-            and np.all(pos < lowrank.moving.size) \
-            and np.array_equal(lowrank.moving[np.minimum(pos, lowrank.moving.size - 1)], used):
+    if lowrank is not None and np.isin(used, lowrank.moving).all() \
+            and lowrank.applies(v, prep.bins_hz):
+        pos = np.searchsorted(lowrank.moving, used)          # moving is sorted (np.unique)
         k = np.unique(np.rint(np.interp(grid, prep.bins_hz,
                                         np.arange(prep.bins_hz.size))).astype(np.intp))
         grid = prep.bins_hz[k]
