@@ -264,6 +264,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
     remaining = list(family.candidates())
     last: dict[tuple[str, str], Trial] = {}
     rounds: list[tuple[Trial, ...]] = []
+    unpolished = False          # the last finding's network awaits its polish
     while remaining:
         h_nfev = max_nfev if heldout_nfev is None else heldout_nfev
         stage = f"candidates, round {len(rounds) + 1}"
@@ -288,6 +289,9 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             cur_mism = locate(family.channels, cur.residual, alpha=alpha)
             if not rounds:      # the first control is the start's polish
                 start = ctrl
+            elif unpolished:
+                findings[-1] = replace(findings[-1], after=ctrl)   # ... a finding's polish
+        unpolished = False
         base_ho = _odd_chi2(family, base_even)
         trials = [replace(t, delta_chi2=t.fit.chi2 - cur.chi2, delta_bic=t.fit.bic - cur.bic,
                           heldout_delta_chi2=t.heldout_delta_chi2 - base_ho)
@@ -314,15 +318,20 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         elif best.max_corr > 0.95:
             notes.append(f"largest parameter correlation {best.max_corr:.3f} "
                          f"({best.corr_with})")
-        # the accepted network gets the same polish as the start before it is reported
-        after = refit(family, best.fit.applied, best.fit.params, max_nfev=max_nfev)
-        if after.chi2 >= best.fit.chi2:
-            after = best.fit
-        findings.append(Finding(best.candidate, cur, after, best, identifiable, alts,
+        # the accepted network gets the same polish as the start before it is reported:
+        # the next round's control (below, at the end when no round follows)
+        findings.append(Finding(best.candidate, cur, best.fit, best, identifiable, alts,
                                 "; ".join(notes)))
-        cur = after
+        cur = best.fit
+        unpolished = True
         cur_mism = locate(family.channels, cur.residual, alpha=alpha)
         remaining = [c for c in remaining if c.key != best.candidate.key]
+    if unpolished:
+        pol = refit(family, cur.applied, cur.params, max_nfev=max_nfev)
+        if pol.chi2 < cur.chi2:
+            cur = pol
+            findings[-1] = replace(findings[-1], after=cur)
+            cur_mism = locate(family.channels, cur.residual, alpha=alpha)
     rejected = tuple((c, _reason(last[c.key], bic_min, bool(cur_mism)) if c.key in last
                       else "not tried")
                      for c in remaining)
