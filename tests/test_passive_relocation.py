@@ -46,13 +46,17 @@ def test_fit_passive_within_bound(name: str) -> None:
 
 
 def test_relocation_beats_fixed_poles() -> None:
-    """Clarity_example.S2P (40 points): its 20-pole fit reaches a largest singular value of
-    1.84 above the band and D of 1.5; enforcement with these poles changes the response by
-    about 7x the fit error, the relocated passive model by less than half of that."""
+    """Clarity_example.S2P (40 points): its 20-pole fit is grossly non-passive above the
+    band; enforcement with these poles changes the response by 3.4-10.6x the fit error,
+    the relocated passive model by 0.8-1.3x (measured with five OpenBLAS kernels). The
+    order is fixed: with 40 points of 4 responses a 20-pole fit is near interpolation, and
+    the automatic order varied with the BLAS kernel (16-25 poles, 19-50 before the order
+    was judged by the error corrected for the fitted parameters), which would test the
+    order choice, not the relocation."""
     data = read_spectrum(VFBENCH / "Clarity_example.S2P").to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model, _ = vector_fit(data)
+        model, _ = vector_fit(data, order=20)
     fit_err = fit_errors(model, data)[1]
     margin = min(1e-6, 0.1 * fit_err)
 
