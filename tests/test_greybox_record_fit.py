@@ -171,3 +171,19 @@ def test_joint_stage_recovers_the_winding_rotor_capacitance(record: Recording) -
         assert abs(p["insulation.C_wr"] / c_wr - 1) < 0.03
         assert fits[0].params["insulation.C_wr"] == p["insulation.C_wr"]
         assert jrep.rel_std["insulation.C_wr"] < 0.03
+
+
+def test_interval_without_bound_is_none() -> None:
+    """A covariance of 1e24 in log units (a direction the data do not see) gives no bound:
+    lo and hi are None, not 0 and an overflowed inf (with a RuntimeWarning)."""
+    import warnings
+    from types import SimpleNamespace
+
+    ps = default_params()
+    name = "airgap.C_rf"
+    rep = SimpleNamespace(names=(name,), cov_log=np.array([[1e24]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        iv = log_interval(ps, rep, lambda q: q[name])
+    assert iv["lo"] is None and iv["hi"] is None
+    assert iv["std_log"] == pytest.approx(1e12, rel=1e-9)

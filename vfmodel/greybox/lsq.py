@@ -52,6 +52,7 @@ COMPRESS_MIN_WORK = 5e7
 Jacobian reaches this (the solver's SVD then costs ~25 ms or more per step) and
 ``m >= 10 n``. Below it the SVD is cheap and the compressed steps, equal only to
 rounding, would merely perturb the path of fits that end at their evaluation limit."""
+_LOG_SPAN_MAX = 50.0  # an interval beyond e^50 (5e21x) either way states no bound
 
 
 def _last_value(g: Callable[[ArrF], ArrF]) -> Callable[[ArrF], ArrF]:
@@ -208,5 +209,7 @@ def log_interval(params: ParamSet, report: LogCovariance,
         return {"value": q0, "lo": None, "hi": None, "std_log": None}
     var = float(g[used] @ cov[np.ix_(used, used)] @ g[used])
     sd = float(np.sqrt(max(var, 0.0)))
+    if level_z * sd > _LOG_SPAN_MAX:  # no bound the data give (exp would overflow)
+        return {"value": q0, "lo": None, "hi": None, "std_log": sd}
     return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
             "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd}
