@@ -81,12 +81,16 @@ _DROP = 0.05  # cuts with more slack than this (relative to the response) are dr
 _DROP_AFTER = 3
 # exact conditions (semidefinite cones, _cones) where cuts keep failing: at a frequency cut
 # this many times before; cones of at most _CONE_SIZE rows and columns (S: 4 ports; Z, Y: 8),
-# with at most _CONE_ROWS svec rows in all. Large cones are costly: the 8-port HFSS export
-# of data/vfbench (S, 32 x 32 cones, 528 svec rows each) took 246 s with 40 cones (up to
-# 90 s per program) and 46 s with 3, against 12 s with cuts alone (11 programs).
+# at most _CONE_ROWS svec rows in all, programs of at most _CONE_UNKNOWNS unknowns. Large
+# programs with cones are costly (primal form, :mod:`vfmodel.fitting._qp`): the 8-port
+# HFSS export of data/vfbench (S, 32 x 32 cones, 528 svec rows each) took 246 s with 40
+# cones (up to 90 s per program) and 46 s with 3, against 12 s with cuts alone (11
+# programs); a random 8-port Y model with 43 basis functions (2752 unknowns) took 28.5 s
+# with 8 cones, against 2.2 s with cuts alone (6 programs either way).
 _CONE_AFTER = 2
 _CONE_SIZE = 16
 _CONE_ROWS = 2000
+_CONE_UNKNOWNS = 500
 _ALL_BELOW = 0
 _COMBOS = 3  # mixtures among at most this many of the lowest columns (cuts grow as k^2)
 _MAX_TARGET = 1e-3  # deepest cut margin (relative)
@@ -351,13 +355,16 @@ def _cones(
     return out
 
 
-def _exact_choice(new_f: FloatArray, fresh: NDArray[np.bool_], hits: dict[float, int],
-                  n_cones: int, n: int, kind: str) -> NDArray[np.bool_]:
+def _exact_choice(setup: _Setup, new_f: FloatArray, fresh: NDArray[np.bool_],
+                  hits: dict[float, int], n_cones: int) -> NDArray[np.bool_]:
     """Which of the frequencies ``new_f`` get their exact condition (:func:`_cones`)
     instead of cuts: those cut ``_CONE_AFTER`` times before and not yet exact (``fresh``),
-    the most often cut first, while the cones' rows stay within ``_CONE_ROWS``."""
-    k = 4 * n if kind == "S" else 2 * n
-    room = max(_CONE_ROWS // (k * (k + 1) // 2) - n_cones, 0) if k <= _CONE_SIZE else 0
+    the most often cut first, while the cones' rows stay within ``_CONE_ROWS``; none for
+    cones larger than ``_CONE_SIZE`` or programs of more than ``_CONE_UNKNOWNS``."""
+    n = setup.n
+    k = 4 * n if setup.model.kind == "S" else 2 * n
+    small = k <= _CONE_SIZE and n * n * setup.n_b <= _CONE_UNKNOWNS
+    room = max(_CONE_ROWS // (k * (k + 1) // 2) - n_cones, 0) if small else 0
     count = np.array([hits[fk] for fk in new_f])
     cand = np.flatnonzero(fresh & (count >= _CONE_AFTER))
     chosen = cand[np.argsort(-count[cand], kind="stable")][:room]
@@ -568,7 +575,7 @@ def enforce(
         target = np.array([min(margin * 10.0 ** hits[fk], _MAX_TARGET) for fk in new_f])
         target = np.maximum(target, margin)
         fresh = ~np.isin(new_f, list(cones))
-        coned = _exact_choice(new_f, fresh, hits, len(cones), n, model.kind)
+        coned = _exact_choice(setup, new_f, fresh, hits, len(cones))
         cut = fresh & ~coned
         a_new, b_new = _cuts(setup, current, new_f[cut], _response(model, new_f[cut]),
                              target[cut])
