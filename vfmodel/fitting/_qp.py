@@ -203,7 +203,7 @@ def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
     (OPENBLAS_CORETYPE=Sandybridge) every dual program with them ended "AlmostSolved"
     with cones violated by up to 1.3e-5 (the frequency was cut again, 30 programs without
     a certificate); in the primal form the same cones held (smallest eigenvalue above
-    -1e-9) and the model was certified after 8 programs."""
+    -1e-9) and the model was certified after 8 programs (cones after one cut)."""
     a = sparse.csc_matrix(a_all)
     n = a.shape[1]
     eye = sparse.identity(n, format="csc")
