@@ -93,28 +93,36 @@ def test_iteration_limit_is_a_typed_error() -> None:
 
 
 def test_direct_program_matches_cvxpy(monkeypatch: pytest.MonkeyPatch) -> None:
-    # the direct Clarabel program (the dual of the least-norm problem) and the cvxpy
-    # formulation of the same cuts reach the same minimum (1e-4 relative), feasibly
+    # the direct Clarabel program (the dual of the least-norm problem; the primal with
+    # exact per-frequency cones) and the cvxpy formulation of the same constraints reach
+    # the same minimum (1e-4 relative), feasibly
     for kind, seed in (("S", 5), ("Y", 6)):
         model = random_nonpassive(np.random.default_rng(seed), kind, 3)
         grabbed: list[tuple[Any, Any, Any]] = []
         orig = enforce_mod._solve
 
-        def grab(setup: Any, a: Any, b: Any, scale: float = 1.0, _orig: Any = orig,
-                 _g: Any = grabbed) -> Any:
+        def grab(setup: Any, a: Any, b: Any, scale: float = 1.0, psd: Any = (),
+                 _orig: Any = orig, _g: Any = grabbed) -> Any:
             _g.append((setup, a, b))
-            return _orig(setup, a, b, scale=scale)
+            return _orig(setup, a, b, scale=scale, psd=psd)
 
         monkeypatch.setattr(enforce_mod, "_solve", grab)
         enforce_passivity(model)
         monkeypatch.setattr(enforce_mod, "_solve", orig)
         setup, a, b = grabbed[0]
-        x_direct = orig(setup, a, b)
-        x_cvx = enforce_mod._solve_cvxpy(setup, a, b)
-        obj_d = np.linalg.norm(setup.r_blocks @ x_direct)
-        obj_c = np.linalg.norm(setup.r_blocks @ x_cvx)
-        assert abs(obj_d - obj_c) <= 1e-4 * obj_c
-        assert np.min(a @ x_direct - b) >= -1e-7
+        worst = np.array([check_passivity(model).worst_freq_hz])
+        cones = tuple(enforce_mod._cones(setup, worst, enforce_mod._response(model, worst),
+                                         np.array([1e-6])))
+        for psd in ((), cones):
+            x_direct = orig(setup, a, b, psd=psd)
+            x_cvx = enforce_mod._solve_cvxpy(setup, a, b, psd)
+            obj_d = np.linalg.norm(setup.r_blocks @ x_direct)
+            obj_c = np.linalg.norm(setup.r_blocks @ x_cvx)
+            assert abs(obj_d - obj_c) <= 1e-4 * obj_c
+            assert np.min(a @ x_direct - b) >= -1e-7
+            for blk in psd:
+                mat = (enforce_mod._unsvec(blk.k) @ (blk.b - blk.a @ x_direct))
+                assert np.linalg.eigvalsh(mat.reshape(blk.k, blk.k))[0] >= -1e-7
 
 
 def test_direct_program_finds_a_tiny_optimum() -> None:

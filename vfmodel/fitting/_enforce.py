@@ -17,8 +17,15 @@ constraint on the total perturbation (a cut). This is the linearised constraint 
 Gustavsen and Semlyen [1] and Gustavsen [2] (first-order eigenvalue / singular value
 perturbation), used here as a cutting plane [3]: every program starts from the original
 model with all cuts found so far, so the change is minimised for the final constraint
-set instead of accumulated step by step. The program is a QP (no semidefinite cones),
-which Clarabel solves quickly and reliably.
+set instead of accumulated step by step. With cuts alone the program is a QP, which
+Clarabel solves quickly and reliably.
+
+A cut is one supporting half space at the current vectors; near a curved boundary whose
+vectors rotate from program to program, cuts creep and the violation returns (Kelley's
+method converges slowly). A frequency cut twice before therefore gets the exact
+condition instead, a semidefinite cone (S: [[c I, H], [H^H, c I]] >= 0; Z, Y: the
+Hermitian part minus the margin >= 0; both in their real form), for small port counts, few
+unknowns and a bounded number of cones (their cost grows quickly with the size).
 
 The objective, the weighted change of H on the data frequencies, is the sum over entries
 (i, j) of ||W_ij Phi x_ij||^2 = ||R_ij x_ij||^2 with Phi = QR (R_ij square), so the program
@@ -46,6 +53,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, Literal
 
 import numpy as np
@@ -55,7 +63,7 @@ from scipy import sparse
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, SolverError
-from vfmodel.fitting._qp import DConstraint, solve_qp
+from vfmodel.fitting._qp import DConstraint, PsdBlock, solve_qp, svec
 from vfmodel.fitting.passivity import PassivityReport, check_passivity
 
 FloatArray = NDArray[np.float64]
@@ -71,6 +79,22 @@ _DROP = 0.05  # cuts with more slack than this (relative to the response) are dr
 # BLAS kernel and not within 30 with another (OPENBLAS_CORETYPE=Sandybridge), its
 # violation returning where dropped cuts had held it.
 _DROP_AFTER = 3
+# exact conditions (semidefinite cones, _cones) where cuts keep failing: at a frequency cut
+# this many times before; cones of at most _CONE_SIZE rows and columns (S: 4 ports; Z, Y: 8),
+# at most _CONE_ROWS svec rows in all, programs of at most _CONE_UNKNOWNS unknowns. Large
+# programs with cones are costly (primal form, :mod:`vfmodel.fitting._qp`): the 8-port
+# HFSS export of data/vfbench (S, 32 x 32 cones, 528 svec rows each) took 246 s with 40
+# cones (up to 90 s per program) and 46 s with 3, against 12 s with cuts alone (11
+# programs); a random 8-port Y model with 43 basis functions (2752 unknowns) took 28.5 s
+# with 8 cones, against 2.2 s with cuts alone (6 programs either way). The delayed line of
+# tests/test_fit_robust.py (2 ports, 36 rows a cone) used 21-31 cones over five BLAS
+# kernels and 7-10 programs; with 1000 rows 8-13, with 500 10-15. Cones after one cut:
+# 7-9 programs, more cones; after three: 8-10, but enforced errors on data/vfbench up to
+# 5 % larger (mlin...kirschning.s2p 2.41 against 2.29 times the fit error).
+_CONE_AFTER = 2
+_CONE_SIZE = 16
+_CONE_ROWS = 2000
+_CONE_UNKNOWNS = 500
 _ALL_BELOW = 0
 _COMBOS = 3  # mixtures among at most this many of the lowest columns (cuts grow as k^2)
 _MAX_TARGET = 1e-3  # deepest cut margin (relative)
@@ -94,6 +118,16 @@ _ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
 _DIRECT: tuple[dict[str, Any], ...] = (
     {"tol_gap_abs": 1e-30, "tol_gap_rel": 1e-10, "tol_feas": 1e-9},
     {"tol_gap_abs": 1e-30, "tol_gap_rel": 1e-8, "tol_feas": 1e-8,
+     "static_regularization_constant": 1e-7, "max_step_fraction": 0.95},
+)
+
+
+# settings of the primal program (with exact per-frequency cones; its objective is scaled
+# near 1/2), tried in turn
+_PRIMAL: tuple[dict[str, Any], ...] = (
+    {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-6, "tol_feas": 1e-9,
+     "chordal_decomposition_enable": False},
+    {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-6, "tol_feas": 1e-8,
      "static_regularization_constant": 1e-7, "max_step_fraction": 0.95},
 )
 
@@ -262,6 +296,85 @@ def _cuts(
     if not rows:
         return np.zeros((0, n * n * setup.n_b)), np.zeros(0)
     return np.vstack(rows), np.concatenate(rhs)
+
+
+@lru_cache(maxsize=16)
+def _embedding(kind: str, n: int) -> tuple[FloatArray, int]:
+    """The linear part of the exact condition at one frequency as a map from
+    z = [Re H (row-major), Im H] (2 n^2) to svec(M) (T, svec length x 2 n^2), and k.
+
+    S: M = [[c I, E], [E^T, c I]] >= 0 with E = [[Re H, -Im H], [Im H, Re H]] (4n x 4n),
+    i.e. sigma_max(H) <= c: E is the real form of H and has its singular values (each
+    twice). Z, Y: M = [[Re G, -Im G], [Im G, Re G]] - t I >= 0 with G = (H + H^H) / 2
+    (2n x 2n), i.e. lambda_min(G) >= t. The constants (c I, -t I) are added by the caller.
+    """
+    k = 4 * n if kind == "S" else 2 * n
+    cols: list[FloatArray] = []
+    for part in (1.0, 1j):
+        for m in range(n * n):
+            h = np.zeros((n, n), complex)
+            h.flat[m] = part
+            if kind == "S":
+                e = np.block([[h.real, -h.imag], [h.imag, h.real]])
+                mat = np.block([[np.zeros((2 * n, 2 * n)), e], [e.T, np.zeros((2 * n, 2 * n))]])
+            else:
+                g = 0.5 * (h + np.conj(h.T))
+                mat = np.block([[g.real, -g.imag], [g.imag, g.real]])
+            cols.append(svec(mat))
+    return np.column_stack(cols), k
+
+
+def _cones(
+    setup: _Setup, f_hz: FloatArray, h_orig: ComplexArray, target: FloatArray
+) -> list[PsdBlock]:
+    """The exact passivity condition at frequencies ``f_hz`` as semidefinite blocks:
+    S: sigma_max(H0 + dH) <= 1 - target; Z, Y: lambda_min of the Hermitian part of
+    H0 + dH >= target * size, divided by the size (as the cuts' rows).
+
+    A cut holds one supporting half space of this convex set, taken at the current
+    model's singular (eigen-) vectors; where those vectors rotate from program to program
+    the cuts creep towards the boundary and the violation returns (Kelley's method). The
+    cone is the whole set: the frequency cannot be violated again."""
+    n = setup.n
+    t_map, k = _embedding(setup.model.kind, n)
+    phi = setup.phi(f_hz)
+    sizes = _sizes(setup, f_hz)
+    eye = np.eye(k)
+    out: list[PsdBlock] = []
+    for q in range(f_hz.size):
+        h = h_orig[q] / setup.h0
+        z0 = np.concatenate([h.real.ravel(), h.imag.ravel()])
+        # z(x) = z0 + Z x: entry m's real (imaginary) part is Re (Im) phi . x_m
+        dz = sparse.vstack([
+            sparse.kron(sparse.identity(n * n), phi[q].real[None, :]),
+            sparse.kron(sparse.identity(n * n), phi[q].imag[None, :]),
+        ], format="csr")
+        lin = sparse.csr_matrix(t_map) @ dz
+        if setup.model.kind == "S":
+            a, b = -lin, t_map @ z0 + svec((1.0 - target[q]) * eye)
+        else:
+            a = -lin / sizes[q]
+            b = t_map @ z0 / sizes[q] - svec(target[q] * eye)
+        out.append(PsdBlock(sparse.csr_matrix(a), np.asarray(b, dtype=float), k))
+    return out
+
+
+def _exact_choice(setup: _Setup, new_f: FloatArray, fresh: NDArray[np.bool_],
+                  hits: dict[float, int], n_cones: int) -> NDArray[np.bool_]:
+    """Which of the frequencies ``new_f`` get their exact condition (:func:`_cones`)
+    instead of cuts: those cut ``_CONE_AFTER`` times before and not yet exact (``fresh``),
+    the most often cut first, while the cones' rows stay within ``_CONE_ROWS``; none for
+    cones larger than ``_CONE_SIZE`` or programs of more than ``_CONE_UNKNOWNS``."""
+    n = setup.n
+    k = 4 * n if setup.model.kind == "S" else 2 * n
+    small = k <= _CONE_SIZE and n * n * setup.n_b <= _CONE_UNKNOWNS
+    room = max(_CONE_ROWS // (k * (k + 1) // 2) - n_cones, 0) if small else 0
+    count = np.array([hits[fk] for fk in new_f])
+    cand = np.flatnonzero(fresh & (count >= _CONE_AFTER))
+    chosen = cand[np.argsort(-count[cand], kind="stable")][:room]
+    out = np.zeros(new_f.size, dtype=bool)
+    out[chosen] = True
+    return out
 
 
 def _sizes(setup: _Setup, f_hz: FloatArray) -> FloatArray:
@@ -446,6 +559,7 @@ def enforce(
     slack = np.zeros(0, dtype=int)  # programs in a row each cut was slack
     pool = np.zeros(0)  # every cut frequency so far (Hz)
     hits: dict[float, int] = {}
+    cones: dict[float, PsdBlock] = {}  # exact conditions at frequencies cut again
     new_f = _band_points(first.bands_hz, first.worst_freq_hz)
     report = first
     scale = 1.0  # objective size of the last program (the next one's scale)
@@ -464,10 +578,16 @@ def enforce(
             hits[fk] = hits.get(fk, -1) + 1
         target = np.array([min(margin * 10.0 ** hits[fk], _MAX_TARGET) for fk in new_f])
         target = np.maximum(target, margin)
-        a_new, b_new = _cuts(setup, current, new_f, _response(model, new_f), target)
+        fresh = ~np.isin(new_f, list(cones))
+        coned = _exact_choice(setup, new_f, fresh, hits, len(cones))
+        cut = fresh & ~coned
+        a_new, b_new = _cuts(setup, current, new_f[cut], _response(model, new_f[cut]),
+                             target[cut])
+        exact = _cones(setup, new_f[coned], _response(model, new_f[coned]), target[coned])
+        cones.update(zip(new_f[coned], exact, strict=True))
         a_all, b_all = np.vstack([a_all, a_new]), np.concatenate([b_all, b_new])
         slack = np.concatenate([slack, np.zeros(b_new.size, dtype=int)])
-        x_val = _solve(setup, a_all, b_all, scale=scale)
+        x_val = _solve(setup, a_all, b_all, scale=scale, psd=tuple(cones.values()))
         scale = float(np.sum((setup.r_blocks @ x_val) ** 2))
         current = setup.apply(x_val)
         # drop cuts far from active (they only cost solver time); a dropped cut that
@@ -509,6 +629,18 @@ def enforce(
     )
 
 
+def _unsvec(k: int) -> sparse.csr_matrix:
+    """The map from svec (Clarabel's, :func:`vfmodel.fitting._qp.svec`) to the
+    column-major vectorised symmetric k x k matrix."""
+    c, r = np.tril_indices(k)
+    scale = np.where(r == c, 1.0, 1.0 / np.sqrt(2.0))
+    pos = np.arange(r.size)
+    rows = np.concatenate([c * k + r, (r * k + c)[r != c]])
+    cols = np.concatenate([pos, pos[r != c]])
+    vals = np.concatenate([scale, scale[r != c]])
+    return sparse.csr_matrix((vals, (rows, cols)), shape=(k * k, r.size))
+
+
 _ROUNDING = 8 * np.finfo(float).eps  # relative margin of a projected constant
 
 
@@ -540,7 +672,8 @@ def _constant_projection(model: RationalModel) -> tuple[RationalModel, Passivity
                                      "rel_rms_change": rel})
 
 
-def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0) -> FloatArray:
+def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0,
+           psd: tuple[PsdBlock, ...] = ()) -> FloatArray:
     """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x.
 
     Clarabel directly (:mod:`vfmodel.fitting._qp`); cvxpy with the same solver only when
@@ -551,19 +684,25 @@ def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0) -> F
         last = np.arange(setup.n_b - 1, a.shape[1], setup.n_b)
         bound = 1.0 - setup.margin if m.kind == "S" else setup.margin * setup.d_size
         dc = DConstraint(m.kind, m.dd / setup.h0, last, float(setup.col[-1]), bound)
-    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _DIRECT, scale)
+    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _PRIMAL if psd else _DIRECT, scale,
+                    psd)
     if x is not None:
         return x
-    return _solve_cvxpy(setup, a, b)
+    return _solve_cvxpy(setup, a, b, psd)
 
 
-def _solve_cvxpy(setup: _Setup, a: FloatArray, b: FloatArray) -> FloatArray:
+def _solve_cvxpy(setup: _Setup, a: FloatArray, b: FloatArray,
+                 psd: tuple[PsdBlock, ...] = ()) -> FloatArray:
     """The program of :func:`_solve` through cvxpy (forms and settings of _ATTEMPTS)."""
     import cvxpy
 
     x = cvxpy.Variable(a.shape[1])
     resid = setup.r_blocks @ x
     cons: list[Any] = [a @ x >= b]
+    for blk in psd:
+        unvec = _unsvec(blk.k)
+        mat = cvxpy.reshape(unvec @ (blk.b - blk.a @ x), (blk.k, blk.k), order="F")
+        cons.append(mat >> 0)
     if setup.perturb_d:
         # asymptotic condition, exact (a cutting plane converges slowly on the PSD cone of a
         # nearly singular D): D is the last basis column of every entry

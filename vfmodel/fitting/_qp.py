@@ -1,6 +1,7 @@
 """The convex program of passivity enforcement (:mod:`vfmodel.fitting._enforce`) handed
-to Clarabel directly: minimise ||R x||^2 subject to linear cuts and the asymptotic
-condition on D (a small semidefinite cone).
+to Clarabel directly: minimise ||R x||^2 subject to linear cuts, the asymptotic
+condition on D (a small semidefinite cone) and exact per-frequency conditions
+(semidefinite cones, :class:`PsdBlock`).
 
 Building the matrices here instead of through a modelling layer (cvxpy) keeps the cost
 of a program to the interior-point solve itself: at the scale of an 8-port model with
@@ -17,6 +18,7 @@ with quadratic objectives", arXiv:2405.12762 (2024).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,13 +44,31 @@ class DConstraint:
     bound: float  # 1 - margin (S) or margin * d_size (Z, Y)
 
 
+@dataclass(frozen=True)
+class PsdBlock:
+    """A semidefinite constraint ``svec(M(x)) = b - a x`` in the k x k PSD cone
+    (``a``: rows of the svec entries, one column per unknown x)."""
+
+    a: sparse.csr_matrix
+    b: FloatArray
+    k: int
+
+
+def svec(m: FloatArray) -> FloatArray:
+    """Clarabel's vectorised upper triangle of symmetric m (..., k, k): column-major,
+    off-diagonal entries scaled by sqrt 2."""
+    k = m.shape[-1]
+    c, r = np.tril_indices(k)  # (c, r) with r <= c, ordered by c then r
+    return np.asarray(m[..., r, c] * np.where(r == c, 1.0, _SQRT2), dtype=float)
+
+
 def _svec_index(r: int, c: int) -> int:
     """Position of entry (r, c), r <= c, in the column-major upper triangle."""
     return c * (c + 1) // 2 + r
 
 
-def _psd_rows(dc: DConstraint, n_var: int) -> tuple[sparse.csc_matrix, FloatArray, int]:
-    """Rows (A, b) of the semidefinite constraint s = b - A x = svec(M(x)) and its size."""
+def _psd_rows(dc: DConstraint, n_var: int) -> PsdBlock:
+    """The semidefinite block s = b - A x = svec(M(x)) of the D condition."""
     n = dc.d0.shape[0]
     rows: list[int] = []
     cols: list[int] = []
@@ -73,13 +93,8 @@ def _psd_rows(dc: DConstraint, n_var: int) -> tuple[sparse.csc_matrix, FloatArra
                 rows.append(_svec_index(r, c))
                 cols.append(int(dc.index[i * n + j]))
                 vals.append(-(1.0 if r == c else 0.5 * _SQRT2) / dc.col)
-    size = k * (k + 1) // 2
-    b = np.empty(size)
-    for c in range(k):
-        for r in range(c + 1):
-            b[_svec_index(r, c)] = m0[r, c] * (1.0 if r == c else _SQRT2)
-    a = sparse.csc_matrix((vals, (rows, cols)), shape=(size, n_var))
-    return a, b, k
+    a = sparse.csr_matrix((vals, (rows, cols)), shape=(k * (k + 1) // 2, n_var))
+    return PsdBlock(a, svec(m0), k)
 
 
 def _block_inverse(r_blocks: sparse.spmatrix, size: int) -> sparse.csr_matrix:
@@ -98,8 +113,9 @@ def solve_qp(
     d_constraint: DConstraint | None,
     attempts: tuple[dict[str, Any], ...],
     scale: float = 1.0,
+    psd: tuple[PsdBlock, ...] = (),
 ) -> tuple[FloatArray | None, list[str]]:
-    """Minimise ||R x||^2 subject to ``a x >= b`` and ``d_constraint``.
+    """Minimise ||R x||^2 subject to ``a x >= b``, ``d_constraint`` and the blocks ``psd``.
 
     Settings in ``attempts`` are tried in turn until Clarabel reports "Solved"; when none
     does, the last "AlmostSolved" point is returned (the caller certifies the model it
@@ -115,6 +131,7 @@ def solve_qp(
     a_parts: list[sparse.spmatrix] = [sparse.csc_matrix(-(rinv.T @ a.T).T)]
     b_parts: list[FloatArray] = [-np.asarray(b, dtype=float)]
     cones: list[Any] = [clarabel.NonnegativeConeT(int(a.shape[0]))]
+    blocks = list(psd)
     if d_constraint is not None:
         if d_constraint.d0.shape[0] == 1 and d_constraint.kind != "S":
             j = int(d_constraint.index[0])
@@ -123,17 +140,14 @@ def solve_qp(
             b_parts.append(np.array([float(d_constraint.d0[0, 0]) - d_constraint.bound]))
             cones.append(clarabel.NonnegativeConeT(1))
         else:
-            a_psd, b_psd, k = _psd_rows(d_constraint, n_var)
-            a_parts.append(a_psd)
-            b_parts.append(b_psd)
-            cones.append(clarabel.PSDTriangleConeT(k))
-    if len(a_parts) > 1:
-        a_parts[1] = sparse.csc_matrix(a_parts[1] @ rinv)
+            blocks.insert(0, _psd_rows(d_constraint, n_var))
+    for blk in blocks:
+        a_parts.append(blk.a)
+        b_parts.append(blk.b)
+        cones.append(clarabel.PSDTriangleConeT(blk.k))
+    a_parts[1:] = [sparse.csc_matrix(part @ rinv) for part in a_parts[1:]]
     a_all = sparse.vstack(a_parts, format="csr")
     b_all = np.concatenate(b_parts)
-    # the dual: y = -A^T z with z in the (self-dual) cones minimising
-    # 1/2 z^T (A A^T) z + b^T z -- as many unknowns as constraints, a dense Gram matrix
-    a_dense = a_all.toarray()
     # objective scale: Clarabel's duality-gap test is relative to max(1, |objective|),
     # so an optimum of 1e-18 (a change of 1e-9, lossless data) passes for "Solved" at
     # any point whose objective is below the tolerance (measured: changes of 4e-6 for an
@@ -144,15 +158,13 @@ def solve_qp(
     # stall the solver) leaves the previous solution. Well-scaled programs are solved once
     # (an a-priori scale from the cuts alone blew the Gram matrix of an ill-conditioned
     # 3-point program up to 1e14 and its solves to 200 iterations).
-    gram = sparse.triu(sparse.csc_matrix(a_dense @ a_dense.T), format="csc")
-    m = a_dense.shape[0]
-    neg_eye = -sparse.identity(m, format="csc")
+    solve_once = _primal_form(a_all, b_all, cones, attempts) if psd else \
+        _dual_form(a_all, b_all, cones, attempts)
     statuses: list[str] = []
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     best: FloatArray | None = None
     for _ in range(_RESCALES + 1):
-        y, status = _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts,
-                                a_dense)
+        y, status = solve_once(scale)
         statuses += status
         if y is None:
             break
@@ -162,6 +174,44 @@ def solve_qp(
             break
         scale = size2
     return best, statuses
+
+
+_Form = Callable[[float], tuple[FloatArray | None, list[str]]]
+
+
+def _dual_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
+               attempts: tuple[dict[str, Any], ...]) -> _Form:
+    """The program as its dual: y = -A^T z with z in the (self-dual) cones minimising
+    1/2 z^T (A A^T) z + b^T z -- as many unknowns as constraints (a dense Gram matrix),
+    few next to the unknowns of an 8-port model with 100 poles (6,000)."""
+    a_dense = a_all.toarray()
+    gram = sparse.triu(sparse.csc_matrix(a_dense @ a_dense.T), format="csc")
+    m = a_dense.shape[0]
+    neg_eye = -sparse.identity(m, format="csc")
+
+    def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
+        return _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts, a_dense)
+
+    return solve_once
+
+
+def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
+                 attempts: tuple[dict[str, Any], ...]) -> _Form:
+    """The program itself: minimise 1/2 ||y||^2 / scale subject to A y + s = b, s in the
+    cones. Used with the exact per-frequency cones, whose dual Clarabel did not solve
+    accurately: on the delayed-line model of tests/test_fit_robust.py
+    (OPENBLAS_CORETYPE=Sandybridge) every dual program with them ended "AlmostSolved"
+    with cones violated by up to 1.3e-5 (the frequency was cut again, 30 programs without
+    a certificate); in the primal form the same cones held (smallest eigenvalue above
+    -1e-9) and the model was certified after 8 programs (cones after one cut)."""
+    a = sparse.csc_matrix(a_all)
+    n = a.shape[1]
+    eye = sparse.identity(n, format="csc")
+
+    def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
+        return _run(eye / scale, np.zeros(n), a, b_all, cones, attempts, lambda x: x)
+
+    return solve_once
 
 
 _SMALL_OBJECTIVE = 1e-6  # scaled objective below which the program is solved again
@@ -177,9 +227,23 @@ def _solve_dual(
     a_dense: FloatArray,
 ) -> tuple[FloatArray | None, list[str]]:
     """One dual program (settings tried in turn); y = -A^T z and the statuses."""
+    return _run(gram, q, neg_eye, np.zeros(gram.shape[0]), cones, attempts,
+                lambda z: -(a_dense.T @ z))
+
+
+def _run(
+    p: sparse.csc_matrix,
+    q: FloatArray,
+    a: sparse.csc_matrix,
+    b: FloatArray,
+    cones: list[Any],
+    attempts: tuple[dict[str, Any], ...],
+    to_y: Callable[[FloatArray], FloatArray],
+) -> tuple[FloatArray | None, list[str]]:
+    """One Clarabel program, settings tried in turn until "Solved" (else the last
+    "AlmostSolved" point); ``to_y`` maps its solution to y. Returns y and the statuses."""
     import clarabel
 
-    m = gram.shape[0]
     statuses: list[str] = []
     almost: FloatArray | None = None
     for extra in attempts:
@@ -188,21 +252,18 @@ def _solve_dual(
         for key, val in extra.items():
             setattr(settings, key, val)
         try:
-            sol = clarabel.DefaultSolver(gram, q, neg_eye, np.zeros(m), cones,
-                                         settings).solve()
+            sol = clarabel.DefaultSolver(p, q, a, b, cones, settings).solve()
         except Exception as err:  # the solver's own errors (e.g. a failed factorisation)
             statuses.append(f"error {err}")
             continue
         status = str(sol.status)
         statuses.append(status)
-        z = np.asarray(sol.x, dtype=float)
-        if not np.all(np.isfinite(z)):
+        sol_x = np.asarray(sol.x, dtype=float)
+        if not np.all(np.isfinite(sol_x)):
             continue
-        y = -(a_dense.T @ z)
+        y = to_y(sol_x)
         if status == "Solved":
             return y, statuses
         if status == "AlmostSolved":
             almost = y
     return almost, statuses
-
-
