@@ -305,9 +305,10 @@ def truth_values(case: ConcealedCase, seed: int = 0, unseen: bool = False,
     """Truth parameters (100-rpm lubricant values) and the effect size actually used."""
     r_truth, r_size, _, _ = _rngs(case, seed, unseen)
     p0 = default_params()
-    # every parameter but the insulation tapers (the cases were drawn before they existed)
+    # every parameter but the insulation tapers and the end-winding capacitance (the cases
+    # were drawn before they existed)
     p = p0.perturbed(r_truth, config.perturb,
-                     [n for n in p0.names if n not in TAPER_NAMES])
+                     [n for n in p0.names if n not in (*TAPER_NAMES, "winding.C_pp")])
     size = dict(case.size)
     if unseen:
         for k in sorted(size):

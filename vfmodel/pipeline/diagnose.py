@@ -24,7 +24,8 @@ from vfmodel.detective.problem import Family, channel_slices
 from vfmodel.errors import InputError
 from vfmodel.greybox.effects import EFFECT_INFO
 
-__all__ = ["DiagnoseResult", "chi2_per_channel", "diagnosis_json", "identifiability_json", "run_diagnose"]
+__all__ = ["DiagnoseResult", "chi2_per_channel", "diagnosis_json", "identifiability_json",
+           "run_diagnose"]
 
 
 @dataclass(frozen=True)
