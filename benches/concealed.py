@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from benches.drive_extra import extra_steady_state, shaft_frame_impedance
 from benches.noise import add_noise, make_emi, snr_db
 from benches.truth import lubricant_at_speed
 from vfmodel.core.atomic import atomic_directory
@@ -73,6 +74,7 @@ from vfmodel.greybox.objective import (
 from vfmodel.greybox.params import ParamSet
 
 __all__ = [
+    "BEARING_CASES",
     "LOCATIONS",
     "PMSM_CASES",
     "BenchConfig",
@@ -104,7 +106,12 @@ class ConcealedCase:
     variant scales a value by ``x ** sign``, ``x`` in [0.7, 1.5]). ``truth_rungs`` /
     ``truth_sections`` (when set) discretise the truth unlike the detective's network
     (skin-effect ladder rungs, winding sections), so that even the null case cannot be
-    reproduced exactly.
+    reproduced exactly. ``extra``: the dataset also holds the further measurements of
+    CONTRACT section 2a (Shaft-Frame spectra at standstill and at each rotating speed,
+    recording channels ``u_B_DE`` and ``i_CM``). ``draw``: the name whose random streams
+    make the truth and the noise (default ``name``), so that a case with the extra
+    measurements and one without share truth and noise (the extras have a stream of their
+    own; the rest of the data are identical).
     """
 
     name: str
@@ -115,6 +122,8 @@ class ConcealedCase:
     note: str = ""
     truth_rungs: int | None = None
     truth_sections: int | None = None
+    extra: bool = False
+    draw: str | None = None
 
     def __post_init__(self) -> None:
         check_effects(self.decoys, "decoys")
@@ -148,7 +157,8 @@ class ConcealedCase:
     def config(self, base: BenchConfig) -> BenchConfig:
         """``base`` with the case's own truth discretisation."""
         return replace(base, n_rungs=self.truth_rungs or base.n_rungs,
-                       n_sections=self.truth_sections or base.n_sections)
+                       n_sections=self.truth_sections or base.n_sections,
+                       extra=self.extra or base.extra)
 
     def entry(self) -> dict[str, object]:
         """The ``cases.json`` entry (without the calibration numbers)."""
@@ -204,6 +214,32 @@ PMSM_CASES: tuple[ConcealedCase, ...] = (
 )
 """The PMSM cases of ``data/concealed`` (sizes calibrated with :func:`proxy_fit`)."""
 
+_BEARING = ("bearing side, truth with 5-rung ladders and 3 winding sections; effect values "
+            "drawn with the truth (no calibrated size)")
+_X = "; with the further measurements of CONTRACT 2a (Shaft-Frame, u_B_DE, i_CM)"
+
+
+def _bearing_cases() -> tuple[ConcealedCase, ...]:
+    out = []
+    for name, eff, decoys in (("pmsm_two_layer", "lubricant_two_layer", ("ball_skin_effect",)),
+                              ("pmsm_contact", "metallic_contact", ("shaft_skin_effect",)),
+                              ("pmsm_null_bearing", None, ("lubricant_two_layer",))):
+        for extra in (False, True):
+            note = (_BEARING if eff else "null, " + _BEARING.split(", ", 1)[1]) + \
+                (_X if extra else "")
+            out.append(ConcealedCase(name + "_x" * extra, eff, decoys, {}, {}, note,
+                                     truth_rungs=5, truth_sections=3, extra=extra,
+                                     draw=name))
+    return tuple(out)
+
+
+BEARING_CASES: tuple[ConcealedCase, ...] = _bearing_cases()
+"""Bearing-side cases (issue 14): two-layer film and metallic contact concealed, and a
+null case, each without and with (``_x``) the further measurements; a pair shares truth
+and noise (:attr:`ConcealedCase.draw`). The committed ones are those with the extras
+(``data/concealed``); those without are the same data less the extras
+(``scripts/make_concealed.py --only pmsm_two_layer --out DIR``)."""
+
 
 @dataclass(frozen=True)
 class BenchConfig:
@@ -219,6 +255,7 @@ class BenchConfig:
     perturb: float = 0.15
     n_rungs: int = 3
     n_sections: int = 2
+    extra: bool = False
 
     @property
     def scope(self) -> ScopeSpec:
@@ -250,10 +287,16 @@ class CaseData:
     recordings: dict[float, NDArray[np.float32]]   # (4, n): u_U, u_V, u_W, u_B
     bearing_noise_rms_v: float
     snr_db: dict[float, list[float]]
+    shaft_frame: dict[float, ArrC] = field(default_factory=dict)   # noisy, by speed
+    extra_records: dict[float, NDArray[np.float32]] = field(default_factory=dict)  # u_B_DE, i_CM
+
+
+def _key(case: ConcealedCase, seed: int, unseen: bool) -> list[int]:
+    return [int(seed), zlib.crc32((case.draw or case.name).encode()), int(unseen)]
 
 
 def _rngs(case: ConcealedCase, seed: int, unseen: bool) -> list[np.random.Generator]:
-    ss = np.random.SeedSequence([int(seed), zlib.crc32(case.name.encode()), int(unseen)])
+    ss = np.random.SeedSequence(_key(case, seed, unseen))
     return [np.random.default_rng(s) for s in ss.spawn(4)]
 
 
@@ -262,9 +305,10 @@ def truth_values(case: ConcealedCase, seed: int = 0, unseen: bool = False,
     """Truth parameters (100-rpm lubricant values) and the effect size actually used."""
     r_truth, r_size, _, _ = _rngs(case, seed, unseen)
     p0 = default_params()
-    # every parameter but the insulation tapers (the cases were drawn before they existed)
+    # every parameter but the insulation tapers and the end-winding capacitance (the cases
+    # were drawn before they existed)
     p = p0.perturbed(r_truth, config.perturb,
-                     [n for n in p0.names if n not in TAPER_NAMES])
+                     [n for n in p0.names if n not in (*TAPER_NAMES, "winding.C_pp")])
     size = dict(case.size)
     if unseen:
         for k in sorted(size):
@@ -325,14 +369,48 @@ def generate(case: ConcealedCase, seed: int = 0, unseen: bool = False,
     b_rms = float(np.std(ref)) / 10 ** (scope.snr_bearing_db_standstill / 20)
     recs: dict[float, NDArray[np.float32]] = {}
     snrs: dict[float, list[float]] = {}
+    emis = {}
     inv = InverterSpec()
     for s, y in clean.items():
         rms = np.r_[np.std(y[:3], axis=1) / 10 ** (scope.snr_terminal_db / 20), b_rms]
-        emi = make_emi(r_rec, inv, scope, s)
+        emi = emis[s] = make_emi(r_rec, inv, scope, s)
         noisy = add_noise(y, rms, emi, scope.emi_fraction, r_rec)
         recs[s] = noisy.astype(np.float32)
         snrs[s] = [float(x) for x in snr_db(y, noisy)]
-    return CaseData(case, seed, unseen, config, params, size, f, spectra, recs, b_rms, snrs)
+    data = CaseData(case, seed, unseen, config, params, size, f, spectra, recs, b_rms, snrs)
+    return _with_extra(data, emis) if config.extra else data
+
+
+def _with_extra(data: CaseData, emis: Mapping[float, ArrF]) -> CaseData:
+    """``data`` with the further measurements (CONTRACT section 2a), as
+    ``scripts/make_testbench.py --extra-measurements`` makes them
+    (:mod:`benches.drive_extra`): the Shaft-Frame impedance at standstill and at every
+    rotating speed (relative complex noise ``z_noise``), ``u_B_DE`` with the NDE probe's
+    noise and ``i_CM`` with noise 30 dB below its standstill RMS, sharing the records' EMI.
+    Noise from a stream of their own: the other data are those of the case without them."""
+    cfg, eff = data.config, data.case.truth_effects
+    r_x = np.random.default_rng(np.random.SeedSequence([*_key(data.case, data.seed,
+                                                                data.unseen), 78]))
+    f = data.freq_hz
+    fix = 2j * np.pi * f * data.params["fixture.L"] if "fixture_inductance" in eff else 0.0
+    spec = cfg.spec(eff - {"fixture_inductance"})
+    sf: dict[float, ArrC] = {}
+    for s in (0.0, *(x for x in cfg.speeds if x > 0)):
+        p, st = lubricant_at_speed(data.params, s)
+        z = shaft_frame_impedance(spec.build(p, st), f) + fix
+        sf[s] = z + cfg.z_noise * np.abs(z) * (r_x.standard_normal(f.size)
+                                               + 1j * r_x.standard_normal(f.size)) / np.sqrt(2)
+    cable, inv, scope = CableSpec(), InverterSpec(), cfg.scope
+    clean = {}
+    for s in data.recordings:
+        p, st = lubricant_at_speed(data.params, s)
+        net = spec.build(p, st)
+        clean[s] = extra_steady_state(net, inv, cable, scope, s,
+                                      mna=drive_circuit(net, cable).mna)
+    i_rms = float(np.std(clean[min(clean)][1])) / 10 ** (30 / 20)
+    rec = {s: add_noise(y, np.array([data.bearing_noise_rms_v, i_rms]), emis[s],
+                        scope.emi_fraction, r_x).astype(np.float32) for s, y in clean.items()}
+    return replace(data, shaft_frame=sf, extra_records=rec)
 
 
 def write_case(out: str | Path, data: CaseData,
@@ -351,12 +429,26 @@ def write_case(out: str | Path, data: CaseData,
                 'network, two-level SiC inverter, cable, 25 MHz probes, EMI; made by '
                 'scripts/make_concealed.py"', "", "[impedance]"]
         toml += [f'"{t}" = "impedance/{t}.csv"' for t in data.spectra]
+        at_speed: list[str] = []
+        for s, z in data.shaft_frame.items():
+            fname = "Shaft-Frame.csv" if s == 0 else f"Shaft-Frame_{round(s):04d}rpm.csv"
+            fd = FrequencyData(data.freq_hz, z[:, None, None], "Z")
+            (tmp / "impedance" / fname).write_text(csv_text(fd))
+            if s == 0:
+                toml.append(f'"Shaft-Frame" = "impedance/{fname}"')
+            else:
+                at_speed += ["", "[[impedance_at_speed]]", 'topology = "Shaft-Frame"',
+                             f"speed_rpm = {float(s)}", f'file = "impedance/{fname}"']
         for s, y in data.recordings.items():
             fname = f"rpm{round(s):04d}.npz"
+            more = {}
+            if s in data.extra_records:
+                more = {"u_B_DE": data.extra_records[s][0], "i_CM": data.extra_records[s][1]}
             np.savez_compressed(tmp / "recordings" / fname, u_U=y[0], u_V=y[1], u_W=y[2],
-                                u_B=y[3], fs=np.float64(data.config.fs_hz))
+                                u_B=y[3], **more, fs=np.float64(data.config.fs_hz))
             toml += ["", "[[recording]]", f"speed_rpm = {float(s)}",
                      f'file = "recordings/{fname}"']
+        toml += at_speed
         (tmp / "dataset.toml").write_text("\n".join(toml) + "\n")
         truth = {"case": c.name, "seed": data.seed, "unseen": data.unseen,
                  "effect": c.effect, "location": c.location, "decoys": list(c.decoys),

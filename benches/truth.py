@@ -120,8 +120,11 @@ def truth_params(rng: np.random.Generator | None = None, sigma_log: float = 0.0)
         vals[f"winding.{ph}.C_t"] = p[f"winding.{ph}.C_t"] * a**2
     p = p.with_values(vals)
     if rng is not None and sigma_log > 0:
-        # every parameter but the insulation tapers (the benches were drawn before them)
-        p = p.perturbed(rng, sigma_log, [n for n in p.names if n not in TAPER_NAMES])
+        # every parameter but the insulation tapers and the end-winding capacitance (the
+        # benches were drawn before them; the truth's end-winding capacitance is
+        # TruthDetail.c_pp)
+        p = p.perturbed(rng, sigma_log, [n for n in p.names
+                                         if n not in (*TAPER_NAMES, "winding.C_pp")])
     return p
 
 

@@ -16,6 +16,11 @@ values and effect sizes (the acceptance style "datasets never seen"; needs ``--o
 the detective's network (skin-effect ladders with more rungs, more winding sections), so
 the starting model cannot reproduce the data exactly even where nothing is concealed.
 
+Bearing-side cases (:data:`benches.concealed.BEARING_CASES`, issue 14): two-layer film,
+metallic contact and a null case, with the further measurements of CONTRACT section 2a
+(``<name>_x``, committed) or without them (same truth and noise less the extras; only
+with ``--only``, e.g. ``--only pmsm_two_layer,pmsm_contact --out DIR``).
+
 PMSM cases (:data:`benches.concealed.PMSM_CASES`): each entry also holds ``size``
 (the effect's parameter values), ``proxy_chi2_red`` and ``proxy`` (calibration fit of the
 starting model to the noise-free truth, :func:`benches.concealed.proxy_fit`; about
@@ -35,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches package
 
 from benches.concealed import (
+    BEARING_CASES,
     PMSM_CASES,
     BenchConfig,
     ConcealedCase,
@@ -161,8 +167,9 @@ def main(argv: list[str] | None = None) -> int:
             continue
         cases[name] = make_user_case(out / name, case, a.seed * 1000 + k)
         print(f"wrote {out / name}", file=sys.stderr)
-    for pc in PMSM_CASES:
-        if only and pc.name not in only:
+    for pc in PMSM_CASES + BEARING_CASES:
+        if (only and pc.name not in only) or (not only and pc in BEARING_CASES
+                                               and not pc.extra):
             continue
         t0 = time.perf_counter()
         cases[pc.name] = make_pmsm_case(out / pc.name, pc, a.seed, a.unseen,

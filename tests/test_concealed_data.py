@@ -87,8 +87,9 @@ def test_dataset_readable_and_small(name: str) -> None:
 
 def test_total_size() -> None:
     size = sum(p.stat().st_size for p in DIR.rglob("*") if p.is_file())
-    # 14 PMSM cases of ~1.1 MB and the two RC cases
-    assert size <= 16e6, f"data/concealed: {size / 1e6:.2f} MB"
+    # 14 PMSM cases of ~1.1 MB, 3 bearing-side cases with the further measurements of
+    # ~1.7 MB (tests/test_concealed_bearing.py) and the two RC cases
+    assert size <= 21e6, f"data/concealed: {size / 1e6:.2f} MB"
 
 
 @pytest.mark.parametrize("name", [c.name for c in PMSM if c.effect is not None])

@@ -74,6 +74,17 @@ def test_concealed_case_found_at_the_right_place(concealed: DiagnoseResult) -> N
 def test_null_case_is_clean(null: DiagnoseResult) -> None:
     _check_case(FAST_NULL, null.document)
     assert 0.8 <= null.document["start"]["chi2_red"] <= 1.2
+    # the misfit per channel: every channel of the null case at the noise (0.5-2 per
+    # residual; 101-point spectra, a few hundred H1 bins), and the channels' sum is the
+    # total chi-square
+    for key in ("start", "final"):
+        per = null.document[key]["chi2_per_channel"]
+        assert set(per) == {c.where for c in null.family.channels}
+        assert all(0.5 <= v <= 2.0 for v in per.values()), per
+        fit = getattr(null.diagnosis, key)
+        tot = sum(v * 2 * c.n for c, v in zip(null.family.channels, per.values(),
+                                              strict=True))
+        assert tot == pytest.approx(fit.chi2, rel=1e-9)
 
 
 def test_null_identifiability_and_recommendations(null: DiagnoseResult) -> None:

@@ -44,6 +44,7 @@ Effect = Literal[
     "hertzian_edge_capacitance",
     "metallic_contact",
     "fixture_inductance",
+    "endwinding_capacitance",
 ]
 """Effect vocabulary of the discrepancy detective (CONTRACT section 7)."""
 

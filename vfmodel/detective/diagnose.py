@@ -224,6 +224,24 @@ def _best_start(family: Family, params: ParamSet, n_starts: int, seed: int,
     return best
 
 
+def _restarted(family: Family, fit: FitResult, max_nfev: int, progress: Progress
+               ) -> FitResult:
+    """``fit`` or, when better, the accepted network refitted from the start values the
+    family's own identification gives for its structure (``family.restart``, optional:
+    :meth:`vfmodel.detective.pmsm.PmsmFamily.restart`); a warm start from the network
+    without the effect can stay in that network's valley."""
+    restart = getattr(family, "restart", None)
+    if not callable(restart):
+        return fit
+    progress("re-identify the accepted network", 0, 1)
+    p = restart(fit.applied, fit.params)
+    progress("re-identify the accepted network", 1, 1)
+    if p is None:
+        return fit
+    alt = refit(family, fit.applied, p, max_nfev=max_nfev)
+    return alt if alt.chi2 < fit.chi2 else fit
+
+
 def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
              alpha: float = 1e-3, n_starts: int = 3, seed: int = 0, max_nfev: int = 60,
              max_findings: int = 3, heldout_nfev: int | None = None,
@@ -320,9 +338,10 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
                          f"({best.corr_with})")
         # the accepted network gets the same polish as the start before it is reported:
         # the next round's control (below, at the end when no round follows)
-        findings.append(Finding(best.candidate, cur, best.fit, best, identifiable, alts,
+        after = _restarted(family, best.fit, max_nfev, progress)
+        findings.append(Finding(best.candidate, cur, after, best, identifiable, alts,
                                 "; ".join(notes)))
-        cur = best.fit
+        cur = after
         unpolished = True
         cur_mism = locate(family.channels, cur.residual, alpha=alpha)
         remaining = [c for c in remaining if c.key != best.candidate.key]

@@ -115,6 +115,8 @@ def param_specs() -> tuple[ParamSpec, ...]:
                "terminal-end junction / at the neutral-end junction (3+ sections)"),
         ]
     specs += [
+        _s("winding.C_pp", 20e-12, 1e-13, 1e-8, "winding", "F", "end-winding capacitance "
+           "between each pair of terminals (endwinding_capacitance)"),
         _s("winding.skin_l_frac", 0.1, 1e-3, 0.9, "winding", "", "internal share of L_w"),
         _s("winding.skin_rho", 5.0, 1.2, 100.0, "winding", "", "ladder ratio"),
         _s("insulation.R_ins", 1e8, 1e5, 1e12, "insulation", "ohm", "insulation resistance"),
@@ -269,6 +271,9 @@ def _elements(params: ParamSet | Mapping[str, float], effects: Iterable[str],
                               **ins)  # type: ignore[arg-type]
             els += insulation(f"insulation.wr.{tag}", mid, "SM",
                               c=v["insulation.C_wr"] * w, **ins)  # type: ignore[arg-type]
+    if "endwinding_capacitance" in eff:
+        for a, b in (("U", "V"), ("V", "W"), ("W", "U")):
+            els.append(capacitor(f"winding.C_{a}{b}", a, b, v["winding.C_pp"]))
     ins["r_ins"] = v["insulation.R_ins"]
     els += insulation("airgap", "SM", "F", c=v["airgap.C_rf"], **ins)  # type: ignore[arg-type]
     els += rl_branch("frame", "F", "0", skin="frame_skin_effect" in eff, r_dc=v["frame.R_dc"],

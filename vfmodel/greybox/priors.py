@@ -266,6 +266,8 @@ def _physics(geo: Geometry, speed_rpm: float) -> dict[str, Prior]:
         rg(f"{w}.C_taper", 0.2, 5.0, "line-end to neutral-end share of the insulation "
            "capacitance: coils of unequal slot and end-winding length, reinforced line-end "
            "insulation (a few times either way)")
+    ln("winding.C_pp", 20e-12, 5.0, "end-winding and terminal-box coupling of adjacent "
+       "phases' line-end coils (order of magnitude)")
     rg("winding.skin_l_frac", 0.01, 0.5, "internal share of the winding inductance")
     rg("winding.skin_rho", 1.5, 20.0, "RL-ladder ratio")
     rg("insulation.R_ins", 5e6, 1e13, "IEEE Std 43 minimum to clean modern insulation")

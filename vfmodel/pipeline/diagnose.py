@@ -20,11 +20,12 @@ import numpy as np
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.diagnose import Diagnosis, diagnose, impedance_mape_pct, sentence
 from vfmodel.detective.fit import FitResult
-from vfmodel.detective.problem import Family
+from vfmodel.detective.problem import Family, channel_slices
 from vfmodel.errors import InputError
 from vfmodel.greybox.effects import EFFECT_INFO
 
-__all__ = ["DiagnoseResult", "diagnosis_json", "identifiability_json", "run_diagnose"]
+__all__ = ["DiagnoseResult", "chi2_per_channel", "diagnosis_json", "identifiability_json",
+           "run_diagnose"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,13 @@ def _metrics(family: Family, fit: FitResult) -> dict[str, float | None]:
             "bearing_rel_err_pct": _f(bre(fit)) if callable(bre) else None}
 
 
+def chi2_per_channel(family: Family, fit: FitResult) -> dict[str, float]:
+    """Mean squared normalised residual per residual entry of each channel (the share of
+    the misfit a channel carries; ~1 at the noise)."""
+    return {c.where: float(fit.residual[sl] @ fit.residual[sl]) / (2 * c.n)
+            for c, sl in zip(family.channels, channel_slices(family.channels), strict=True)}
+
+
 def diagnosis_json(family: Family, d: Diagnosis) -> dict[str, Any]:
     """``diagnosis.json`` document (CONTRACT section 7 keys plus details)."""
     findings = []
@@ -88,9 +96,11 @@ def diagnosis_json(family: Family, d: Diagnosis) -> dict[str, Any]:
         "sentence": sentence(d),
         "model": d.family,
         "start": {**_metrics(family, d.start), "n_params": d.start.k,
-                  "n_residuals": d.start.n_points},
+                  "n_residuals": d.start.n_points,
+                  "chi2_per_channel": chi2_per_channel(family, d.start)},
         "final": {**_metrics(family, d.final), "effects_added": [
-            [c.effect, c.location] for c in d.final.applied]},
+            [c.effect, c.location] for c in d.final.applied],
+                  "chi2_per_channel": chi2_per_channel(family, d.final)},
         "remaining_mismatches": [{"where": m.where, "band_hz": list(m.band_hz),
                                   "significance": float(m.significance)} for m in d.remaining],
         "noise": {c.where: {"sigma_log": float(np.median(c.sigma)), "method": c.noise_method}
@@ -105,6 +115,9 @@ def diagnosis_json(family: Family, d: Diagnosis) -> dict[str, Any]:
                             "Gaussian z score",
             "impedance_mape_pct": "mean over spectra of the mean |(|Z_model|-|Z_meas|)/"
                                   "|Z_meas||*100",
+            "chi2_per_channel": "per channel, the sum of its squared noise-normalised "
+                                "residuals over its number of residuals (no parameter "
+                                "correction)",
         },
     }
 
