@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from benches.drive_extra import extra_steady_state, shaft_frame_impedance
-from benches.noise import add_noise, make_emi, snr_db
+from benches.noise import Emi, add_noise, make_emi, snr_db
 from benches.truth import lubricant_at_speed
 from vfmodel.core.atomic import atomic_directory
 from vfmodel.core.frequency_data import FrequencyData
@@ -369,7 +369,7 @@ def generate(case: ConcealedCase, seed: int = 0, unseen: bool = False,
     b_rms = float(np.std(ref)) / 10 ** (scope.snr_bearing_db_standstill / 20)
     recs: dict[float, NDArray[np.float32]] = {}
     snrs: dict[float, list[float]] = {}
-    emis = {}
+    emis: dict[float, Emi] = {}
     inv = InverterSpec()
     for s, y in clean.items():
         rms = np.r_[np.std(y[:3], axis=1) / 10 ** (scope.snr_terminal_db / 20), b_rms]
@@ -381,7 +381,7 @@ def generate(case: ConcealedCase, seed: int = 0, unseen: bool = False,
     return _with_extra(data, emis) if config.extra else data
 
 
-def _with_extra(data: CaseData, emis: Mapping[float, ArrF]) -> CaseData:
+def _with_extra(data: CaseData, emis: Mapping[float, Emi]) -> CaseData:
     """``data`` with the further measurements (CONTRACT section 2a), as
     ``scripts/make_testbench.py --extra-measurements`` makes them
     (:mod:`benches.drive_extra`): the Shaft-Frame impedance at standstill and at every
