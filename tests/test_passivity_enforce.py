@@ -11,6 +11,7 @@ import vfmodel.fitting._enforce as enforce_mod
 from tests._random_models import TWO_PI, random_nonpassive, ref_grid, ref_margin
 from vfmodel import FrequencyData, RationalModel, check_passivity, enforce_passivity
 from vfmodel.errors import PassivityError, SolverError
+from vfmodel.fitting._qp import unsvec
 
 
 def _certify_random(seed: int, cases: list[tuple[str, int, bool]]) -> None:
@@ -121,7 +122,7 @@ def test_direct_program_matches_cvxpy(monkeypatch: pytest.MonkeyPatch) -> None:
             assert abs(obj_d - obj_c) <= 1e-4 * obj_c
             assert np.min(a @ x_direct - b) >= -1e-7
             for blk in psd:
-                mat = (enforce_mod._unsvec(blk.k) @ (blk.b - blk.a @ x_direct))
+                mat = unsvec(blk.k) @ (blk.b - blk.a @ x_direct)
                 assert np.linalg.eigvalsh(mat.reshape(blk.k, blk.k))[0] >= -1e-7
 
 

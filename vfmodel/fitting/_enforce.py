@@ -63,7 +63,7 @@ from scipy import sparse
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, SolverError
-from vfmodel.fitting._qp import DConstraint, PsdBlock, solve_qp, svec
+from vfmodel.fitting._qp import DConstraint, PsdBlock, solve_qp, svec, unsvec
 from vfmodel.fitting.passivity import PassivityReport, check_passivity
 
 FloatArray = NDArray[np.float64]
@@ -629,18 +629,6 @@ def enforce(
     )
 
 
-def _unsvec(k: int) -> sparse.csr_matrix:
-    """The map from svec (Clarabel's, :func:`vfmodel.fitting._qp.svec`) to the
-    column-major vectorised symmetric k x k matrix."""
-    c, r = np.tril_indices(k)
-    scale = np.where(r == c, 1.0, 1.0 / np.sqrt(2.0))
-    pos = np.arange(r.size)
-    rows = np.concatenate([c * k + r, (r * k + c)[r != c]])
-    cols = np.concatenate([pos, pos[r != c]])
-    vals = np.concatenate([scale, scale[r != c]])
-    return sparse.csr_matrix((vals, (rows, cols)), shape=(k * k, r.size))
-
-
 _ROUNDING = 8 * np.finfo(float).eps  # relative margin of a projected constant
 
 
@@ -700,7 +688,7 @@ def _solve_cvxpy(setup: _Setup, a: FloatArray, b: FloatArray,
     resid = setup.r_blocks @ x
     cons: list[Any] = [a @ x >= b]
     for blk in psd:
-        unvec = _unsvec(blk.k)
+        unvec = unsvec(blk.k)
         mat = cvxpy.reshape(unvec @ (blk.b - blk.a @ x), (blk.k, blk.k), order="F")
         cons.append(mat >> 0)
     if setup.perturb_d:

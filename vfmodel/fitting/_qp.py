@@ -62,6 +62,18 @@ def svec(m: FloatArray) -> FloatArray:
     return np.asarray(m[..., r, c] * np.where(r == c, 1.0, _SQRT2), dtype=float)
 
 
+def unsvec(k: int) -> sparse.csr_matrix:
+    """The map from svec (:func:`svec`) to the
+    column-major vectorised symmetric k x k matrix."""
+    c, r = np.tril_indices(k)
+    scale = np.where(r == c, 1.0, 1.0 / _SQRT2)
+    pos = np.arange(r.size)
+    rows = np.concatenate([c * k + r, (r * k + c)[r != c]])
+    cols = np.concatenate([pos, pos[r != c]])
+    vals = np.concatenate([scale, scale[r != c]])
+    return sparse.csr_matrix((vals, (rows, cols)), shape=(k * k, r.size))
+
+
 def _svec_index(r: int, c: int) -> int:
     """Position of entry (r, c), r <= c, in the column-major upper triangle."""
     return c * (c + 1) // 2 + r

@@ -433,7 +433,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     # rotating peaks were 2-10 % off with a rotor-side divider of the wrong scale; held,
     # 21 independent benches: worst speed 10.5 -> 7.6 %, BVR beaten 123 -> 126 of 126
     # speeds (scripts/bench_fidelity.py)
-    held_imp = set(hold_standstill) if "metallic_contact" in eff else set()
+    held = set(hold_standstill) if "metallic_contact" in eff else set()
     if dataset.impedance:
         thin = thin_spectra(dataset.impedance, fit_points)
         best: tuple[float, NetSpec, ParamSet, StageReport] | None = None
@@ -443,7 +443,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             term = impedance_term(thin, sp, p0)
             ps = initial_params(term, p0) if start is None else p0
             pn, rep = fit_stage([(term, 1.0)], ps, [n for n in machine_names(ps, sp)
-                                                    if n not in held_imp],
+                                                    if n not in held],
                                 f"impedance, {cands[k]} sections", max_nfev=max_nfev,
                                 prior_sigma=prior_sigma, progress=prog)
             return sp, pn, rep
@@ -477,7 +477,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         if n_starts > 1:
             term = impedance_term(thin, spec, p0)
             rng = np.random.default_rng(seed)
-            names = tuple(n for n in machine_names(p, spec) if n not in held_imp)
+            names = tuple(n for n in machine_names(p, spec) if n not in held)
             wind = [n for n in names if n.startswith("winding.")]
             starts = [p] + [p.perturbed(rng, 0.5, wind) for _ in range(n_starts - 1)]
             p, rep = _best_of(starts, [(term, 1.0)], names, "impedance multistart", max_nfev,
@@ -504,7 +504,6 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         terms: list[tuple[Term, float]] = [(term0, weight_bearing)]
         if imp is not None:
             terms.insert(0, (imp_fit, 1.0))
-        held = set(hold_standstill) if "metallic_contact" in eff else set()
         p, rep = fit_stage(terms, p, [n for n in names if n not in held],
                            f"standstill {stand[0]:g} rpm",
                            max_nfev=min(max_nfev, max_nfev_standstill),
