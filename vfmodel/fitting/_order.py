@@ -316,13 +316,15 @@ def auto_order(
     if pick is None:  # only when the maximum order stopped the growth
         pick = min(tried, key=lambda t: (t[1], t[0]))
         limit = pick[1]
-    if why == "plateau":
-        # the growth's errors come from one relocation per step: a pick that, relocated to
-        # convergence, beats the plateau by more than the margin shows that the plateau
-        # was the steps' lack of convergence, not the data's; the floor is then its error.
-        # (wr2p2,line.s2p, noise-free: the plateau 2.9e-6 put the 9-pole step, 3.48e-6 or
-        # 3.61e-6 by BLAS kernel, at the boundary 3.6e-6, and the kernel decided between
-        # 8 poles at 2.1e-6 and 9 at 8.2e-7; converged, 9 poles reach 8.2e-7 on both.)
+    if why == "plateau" and pick[1] > best_err:
+        # a pick of fewer poles than the best model is chosen on the growth's errors, one
+        # relocation per step: when it, relocated to convergence, beats the plateau by
+        # more than the margin, the plateau was the steps' lack of convergence, not the
+        # data's, and the floor is its error (wr2p2,line.s2p, noise-free: the plateau
+        # 2.9e-6 put the 9-pole step, 3.48e-6 or 3.61e-6 by BLAS kernel, at the boundary
+        # 3.6e-6, and the kernel decided between 8 poles at 2.1e-6 and 9 at 8.2e-7;
+        # converged, the 9 poles reach 8.2e-7 on both). A pick that is the best model is
+        # relocated to convergence at the end anyway.
         conv = _relocate.iterate(prob, pick[2].reps, max_iterations=max_iterations, tol=tol,
                                  stable=stable, precise=None, patience=_FINAL_PATIENCE,
                                  err_hint=pick[1])
