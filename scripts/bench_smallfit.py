@@ -83,7 +83,7 @@ def main() -> int:
             print(f"{path.name:<34} {k:5d} {n:5d}  {type(err).__name__}: {str(err)[:60]}")
             continue
         f, h = net.f, net.s
-        model, report = out_vf
+        model, _ = out_vf
         err_vf = float(np.linalg.norm(model(f) - h) / np.linalg.norm(h))
         h_sk = np.stack([[out_sk.get_model_response(i, j, f) for j in range(n)]
                          for i in range(n)]).transpose(2, 0, 1)
