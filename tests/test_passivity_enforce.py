@@ -145,3 +145,29 @@ def test_direct_program_finds_a_tiny_optimum() -> None:
     assert x is not None and "Solved" in status
     x_opt = b[0] * a[0] / float(a[0] @ a[0])
     assert np.linalg.norm(x - x_opt) <= 1e-2 * np.linalg.norm(x_opt)
+
+
+def test_tall_program_primal_equals_dual() -> None:
+    # many more cuts than unknowns (enforce._PRIMAL_ROWS, _PRIMAL_TALL) are solved in the
+    # primal form; it must reach the dual form's optimum (an S-type D condition beside)
+    from scipy import sparse
+
+    from vfmodel.fitting._qp import DConstraint, solve_qp
+
+    rng = np.random.default_rng(7)
+    n_b, n = 6, 2
+    n_var = n_b * n * n
+    rows = 4 * max(enforce_mod._PRIMAL_ROWS, int(enforce_mod._PRIMAL_TALL * n_var))
+    a = rng.standard_normal((rows, n_var))
+    b = rng.standard_normal(rows) - 3.0  # the origin violates a few of them
+    assert np.min(b) < 0 < np.max(b)
+    r_blocks = sparse.block_diag([np.triu(rng.standard_normal((n_b, n_b))) + 3 * np.eye(n_b)
+                                  for _ in range(n * n)], format="csr")
+    dc = DConstraint("S", np.diag([0.5, 0.3]), np.arange(n_b - 1, n_var, n_b), 1.0, 1 - 1e-6)
+    x_p, st_p = solve_qp(r_blocks, n_b, a, b, dc, enforce_mod._PRIMAL, primal=True)
+    x_d, st_d = solve_qp(r_blocks, n_b, a, b, dc, enforce_mod._DIRECT, primal=False)
+    assert x_p is not None and x_d is not None and st_p[-1] == st_d[-1] == "Solved"
+    assert np.min(a @ x_p - b) >= -1e-7
+    obj_p, obj_d = np.linalg.norm(r_blocks @ x_p), np.linalg.norm(r_blocks @ x_d)
+    assert abs(obj_p - obj_d) <= 1e-5 * obj_d
+    assert np.linalg.norm(x_p - x_d) <= 1e-3 * np.linalg.norm(x_d)

@@ -209,12 +209,13 @@ class FrequencyData:
                 source=source or network.name,
                 found=f"z0 values {np.unique(z0s)[:4]}",
             )
-        table = {"S": network.s, "Z": network.z, "Y": network.y}
-        if kind not in table:
+        if kind not in ("S", "Z", "Y"):
             raise InputError(f"a network cannot be read as {kind}", expected="Z, Y or S")
+        # only the kind asked for: skrf converts on every access of .z and .y
+        values = network.s if kind == "S" else network.z if kind == "Z" else network.y
         return cls(
             freq_hz=network.f,
-            values=table[kind],
+            values=values,
             kind=kind,
             z0=z0.real if kind == "S" else None,
             source=source or network.name,

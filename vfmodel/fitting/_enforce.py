@@ -122,6 +122,16 @@ _DIRECT: tuple[dict[str, Any], ...] = (
 )
 
 
+# programs of cuts alone are solved in their dual form (one unknown per cut, a dense
+# Gram matrix: few unknowns next to the thousands of an 8-port model's residues), except
+# when the cuts outnumber the unknowns by _PRIMAL_TALL and _PRIMAL_ROWS: the dense dual
+# of a few hundred cuts costs seconds per program (wr2p2,line.s2p with out-of-band poles:
+# 372-666 cuts on 60 unknowns, 0.2-5.5 s each, 26 s for --passive), the primal of its
+# unknowns milliseconds
+_PRIMAL_TALL = 4.0
+_PRIMAL_ROWS = 250
+
+
 # settings of the primal program (with exact per-frequency cones; its objective is scaled
 # near 1/2), tried in turn
 _PRIMAL: tuple[dict[str, Any], ...] = (
@@ -672,8 +682,9 @@ def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0,
         last = np.arange(setup.n_b - 1, a.shape[1], setup.n_b)
         bound = 1.0 - setup.margin if m.kind == "S" else setup.margin * setup.d_size
         dc = DConstraint(m.kind, m.dd / setup.h0, last, float(setup.col[-1]), bound)
-    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _PRIMAL if psd else _DIRECT, scale,
-                    psd)
+    primal = bool(psd) or a.shape[0] > max(_PRIMAL_ROWS, _PRIMAL_TALL * a.shape[1])
+    x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _PRIMAL if primal else _DIRECT,
+                    scale, psd, primal)
     if x is not None:
         return x
     return _solve_cvxpy(setup, a, b, psd)

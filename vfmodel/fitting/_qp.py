@@ -126,6 +126,7 @@ def solve_qp(
     attempts: tuple[dict[str, Any], ...],
     scale: float = 1.0,
     psd: tuple[PsdBlock, ...] = (),
+    primal: bool | None = None,
 ) -> tuple[FloatArray | None, list[str]]:
     """Minimise ||R x||^2 subject to ``a x >= b``, ``d_constraint`` and the blocks ``psd``.
 
@@ -133,7 +134,9 @@ def solve_qp(
     does, the last "AlmostSolved" point is returned (the caller certifies the model it
     leads to independently). ``scale``: the expected ||R x||^2 (e.g. the previous
     program's of a cutting-plane loop, whose optimum only grows as cuts are added), so
-    that one solve is well scaled (see below). Returns (x or None, the statuses).
+    that one solve is well scaled (see below). ``primal``: solve the program itself
+    (:func:`_primal_form`) instead of its dual (:func:`_dual_form`); default: with
+    ``psd`` blocks only. Returns (x or None, the statuses).
     """
     import clarabel
 
@@ -170,8 +173,8 @@ def solve_qp(
     # stall the solver) leaves the previous solution. Well-scaled programs are solved once
     # (an a-priori scale from the cuts alone blew the Gram matrix of an ill-conditioned
     # 3-point program up to 1e14 and its solves to 200 iterations).
-    solve_once = _primal_form(a_all, b_all, cones, attempts) if psd else \
-        _dual_form(a_all, b_all, cones, attempts)
+    solve_once = _primal_form(a_all, b_all, cones, attempts) if \
+        (bool(psd) if primal is None else primal) else _dual_form(a_all, b_all, cones, attempts)
     statuses: list[str] = []
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     best: FloatArray | None = None
