@@ -1,7 +1,6 @@
 """The detective re-identifies an accepted network (``family.restart``) when the effect
-explained at least half of the misfit, and keeps the better of the re-identified start
-(evaluated; the next round's control refits it) and the warm-started fit
-(vfmodel.detective.diagnose._restarted)."""
+explained at least half of the misfit, and keeps the better of the refit from there and
+the warm-started fit (vfmodel.detective.diagnose._restarted)."""
 
 from __future__ import annotations
 
@@ -34,28 +33,26 @@ class _Family:
         return None if self.start is None else params.with_values({"a": self.start})
 
 
-@pytest.mark.parametrize(("start", "eval_chi2", "expect_a"),
+@pytest.mark.parametrize(("start", "refit_chi2", "expect_a"),
                          [(3.0, 5.0, 3.0),       # the re-identified start fits better
                           (3.0, 50.0, 1.0),      # worse: the warm-started fit stays
                           (None, 0.0, 1.0)])     # the family has no identification
 def test_restart_keeps_the_better(monkeypatch: pytest.MonkeyPatch, start: float | None,
-                                  eval_chi2: float, expect_a: float) -> None:
+                                  refit_chi2: float, expect_a: float) -> None:
     budgets: list[int] = []
 
-    def fake_refit(family: Any, applied: Any, params: ParamSet, names: Any = None,
-                   **kw: Any) -> FitResult:
+    def fake_refit(family: Any, applied: Any, params: ParamSet, **kw: Any) -> FitResult:
         budgets.append(kw["max_nfev"])
-        assert names == ()          # evaluated at the start, not fitted
-        return _fit(eval_chi2, params["a"])
+        return _fit(refit_chi2, params["a"])
 
     monkeypatch.setattr(dg, "refit", fake_refit)
     fam = _Family(start)
     # base chi2 100 -> warm-started 20: the effect explained 80 % of the misfit
-    got = dg._restarted(fam, _fit(100.0, 0.5), _fit(20.0, 1.0),  # type: ignore[arg-type]
+    got = dg._restarted(fam, _fit(100.0, 0.5), _fit(20.0, 1.0), 30,  # type: ignore[arg-type]
                         lambda *a: None)
     assert got.params["a"] == expect_a
     assert fam.asked == [((CAND,), 1.0)]
-    assert budgets == ([] if start is None else [1])
+    assert budgets == ([] if start is None else [30])
 
 
 @pytest.mark.parametrize("base_chi2", [40.0, 39.0, 21.0])
@@ -63,12 +60,12 @@ def test_no_restart_when_the_effect_explains_less_than_half(base_chi2: float) ->
     # 20 of 40 is not below half: the warm-started fit is kept, nothing re-identified
     fam = _Family(3.0)
     f = _fit(20.0, 1.0)
-    assert dg._restarted(fam, _fit(base_chi2, 0.5), f,  # type: ignore[arg-type]
+    assert dg._restarted(fam, _fit(base_chi2, 0.5), f, 30,  # type: ignore[arg-type]
                          lambda *a: None) is f
     assert fam.asked == []
 
 
 def test_family_without_restart_is_left_alone() -> None:
     f = _fit(20.0, 1.0)
-    assert dg._restarted(object(), _fit(100.0, 0.5), f,  # type: ignore[arg-type]
+    assert dg._restarted(object(), _fit(100.0, 0.5), f, 30,  # type: ignore[arg-type]
                          lambda *a: None) is f

@@ -227,22 +227,22 @@ def _best_start(family: Family, params: ParamSet, n_starts: int, seed: int,
     return best
 
 
-def _restarted(family: Family, base: FitResult, fit: FitResult, progress: Progress
-               ) -> FitResult:
+def _restarted(family: Family, base: FitResult, fit: FitResult, max_nfev: int,
+               progress: Progress) -> FitResult:
     """``fit`` (the accepted network, warm-started from ``base``) or, when better, that
-    network at the start values the family's own identification gives for its structure
-    (``family.restart``, optional: :meth:`vfmodel.detective.pmsm.PmsmFamily.restart`),
-    evaluated there, not refitted: the next round's control refits it with a candidate's
-    budget before anything is compared with it (or the final polish, when no round follows).
+    network refitted from the start values the family's own identification gives for its
+    structure (``family.restart``, optional:
+    :meth:`vfmodel.detective.pmsm.PmsmFamily.restart`).
 
     A warm start from the network without the effect can stay in that network's valley
     when the effect changes the network much (``pmsm_contact_x``: 35215 -> 56.7 warm,
-    0.98 restarted). The identification is run only when the effect explained at least
-    half of the misfit (``fit.chi2 < base.chi2 / 2``), the case of a network that had bent
-    to absorb the missing physics. A small finding keeps the warm start (independent bench
-    105: end-winding capacitance, chi2_red 11.70 -> 11.40 after the control's polish;
-    re-identified and refitted it reached 11.01, the same finding, for 20 s of a 138 s
-    diagnosis; the re-identified start evaluated without a refit was not better)."""
+    0.98 restarted and refitted; the re-identified start only evaluated was not better
+    than 56.7, and a decoy was accepted next). The identification is run only when the
+    effect explained at least half of the misfit (``fit.chi2 < base.chi2 / 2``), the case
+    of a network that had bent to absorb the missing physics. A small finding keeps the
+    warm start (independent bench 105: end-winding capacitance, chi2_red 11.70 -> 11.40
+    after the next round's polish; re-identified and refitted it reached 11.01, the same
+    finding, for 20 s of a 138 s diagnosis)."""
     restart = getattr(family, "restart", None)
     if not callable(restart) or not fit.chi2 < _RESTART_GAIN * base.chi2:
         return fit
@@ -251,7 +251,7 @@ def _restarted(family: Family, base: FitResult, fit: FitResult, progress: Progre
     progress("re-identify the accepted network", 1, 1)
     if p is None:
         return fit
-    alt = refit(family, fit.applied, p, (), max_nfev=1)
+    alt = refit(family, fit.applied, p, max_nfev=max_nfev)
     return alt if alt.chi2 < fit.chi2 else fit
 
 
@@ -313,8 +313,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         progress(stage, len(remaining), len(remaining))
         assert isinstance(out[0], tuple)
         ctrl, base_even = out[0]
-        if ctrl.chi2 < cur.chi2 or not cur.names:
-            # (a network without fitted names is a restart's evaluation: always refitted)
+        if ctrl.chi2 < cur.chi2:
             # the base refitted with a candidate's budget is better than the base: the
             # candidates are measured against it, so that none wins by iterations alone
             cur = ctrl
@@ -352,7 +351,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
                          f"({best.corr_with})")
         # the accepted network gets the same polish as the start before it is reported:
         # the next round's control (below, at the end when no round follows)
-        after = _restarted(family, cur, best.fit, progress)
+        after = _restarted(family, cur, best.fit, max_nfev, progress)
         findings.append(Finding(best.candidate, cur, after, best, identifiable, alts,
                                 "; ".join(notes)))
         cur = after
@@ -361,7 +360,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         remaining = [c for c in remaining if c.key != best.candidate.key]
     if unpolished:
         pol = refit(family, cur.applied, cur.params, max_nfev=max_nfev)
-        if pol.chi2 < cur.chi2 or not cur.names:
+        if pol.chi2 < cur.chi2:
             cur = pol
             findings[-1] = replace(findings[-1], after=cur)
             cur_mism = locate(family.channels, cur.residual, alpha=alpha)
