@@ -43,7 +43,7 @@ from vfmodel.greybox.bearing import (
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
-from vfmodel.greybox.identify import Identification, RotatingFit, identify
+from vfmodel.greybox.identify import STANDSTILL_HIDDEN, Identification, RotatingFit, identify
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
@@ -55,6 +55,8 @@ from vfmodel.greybox.metrics import (
     spectral_corr_periodogram,
 )
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.path_prior import with_path_prior
+from vfmodel.greybox.priors import parameter_priors
 from vfmodel.greybox.propagate import with_machine_uncertainty
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
@@ -169,6 +171,12 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     # 95 % intervals of the divider capacitances from the last machine stage
     mach = [s for s in ident.stages if s.cov_log is not None
             and not s.name.startswith("lubricant")]
+    if mach and "metallic_contact" in eff:
+        # the closed contact lets the standstill data fix only C_wr times the rotor
+        # current's path: that path (and what the contact hides) is known only through
+        # its physics prior (vfmodel.greybox.path_prior)
+        mach[-1] = with_path_prior(mach[-1], ident.params, parameter_priors(dataset, 0.0),
+                                   held=STANDSTILL_HIDDEN)
     divider_iv: dict[str, Any] = {}
     if mach:
         for key in ("c_wr", "c_rf"):
