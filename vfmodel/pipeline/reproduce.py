@@ -15,7 +15,12 @@ both are reported as 0. ``residual_rms_v`` is the RMS of measured minus modelled
 voltage (filtered): at standstill it is mostly measurement noise, and the measured peak
 (the maximum of signal plus noise over many switching events) then exceeds the noise-free
 peak by a few times this value. ``model`` holds the identified parameters, their relative standard
-uncertainties and the stages; ``blackbox`` the band errors of grey and black box;
+uncertainties and the stages; ``model.divider_intervals`` and
+``bearing.<rpm>.lubricant_interval`` are 95 % intervals in which, with the metallic contact,
+the rotor current's path inductances and the parameters the contact hides are known only
+through their physics priors (:mod:`vfmodel.greybox.path_prior`: the standstill data fix
+``C_wr`` times the path impedance, not the scale; ``C_wr`` and the bearing capacitance are
+identifiable only through those priors); ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
 
