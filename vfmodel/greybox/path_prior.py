@@ -8,7 +8,7 @@ issue 14). A model that is structurally unlike the machine (two rotor halves, tw
 a shaft ladder) then moves the path inductance to wherever its misfit is smallest, and
 ``C_wr`` follows: on independent benches 106, 109, 117 (issue 19) the standstill stage put
 ``shaft.L_1`` at 0.84-1 uH (physics: ~70 nH; the benches' truth ~20 nH) and ``C_wr`` at
-0.07-0.28 times the truth, with a Gauss-Newton interval of a factor 1.4-2.7 that missed it:
+0.07-0.28 times the truth, with a Gauss-Newton interval of a factor 1.4-3.9 that missed it:
 the data's "information" about the path inductances is the model error's.
 
 This module states that plainly. The path inductances (:data:`PATH`) are taken as

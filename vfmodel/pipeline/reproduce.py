@@ -49,6 +49,7 @@ from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
 from vfmodel.greybox.identify import STANDSTILL_HIDDEN, Identification, RotatingFit, identify
+from vfmodel.greybox.joint import SHARED
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
@@ -222,7 +223,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             # 95 % intervals (delta method on the stage's posterior covariance of log p),
             # with the uncertainty of the machine the lubricant was fitted on
             rep = sf.report if not mach else with_machine_uncertainty(
-                sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1])
+                sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1],
+                machine_names=(*SHARED, *(n for n in STANDSTILL_HIDDEN if n not in SHARED)))
             entry["lubricant_interval"] = {
                 "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
                 "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
