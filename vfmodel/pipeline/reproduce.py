@@ -15,7 +15,12 @@ both are reported as 0. ``residual_rms_v`` is the RMS of measured minus modelled
 voltage (filtered): at standstill it is mostly measurement noise, and the measured peak
 (the maximum of signal plus noise over many switching events) then exceeds the noise-free
 peak by a few times this value. ``model`` holds the identified parameters, their relative standard
-uncertainties and the stages; ``blackbox`` the band errors of grey and black box;
+uncertainties and the stages; ``model.divider_intervals`` and
+``bearing.<rpm>.lubricant_interval`` are 95 % intervals in which, with the metallic contact,
+the rotor current's path inductances and the parameters the contact hides are known only
+through their physics priors (:mod:`vfmodel.greybox.path_prior`: the standstill data fix
+``C_wr`` times the path impedance, not the scale; ``C_wr`` and the bearing capacitance are
+identifiable only through those priors); ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
 
@@ -43,7 +48,8 @@ from vfmodel.greybox.bearing import (
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
-from vfmodel.greybox.identify import Identification, RotatingFit, identify
+from vfmodel.greybox.identify import STANDSTILL_HIDDEN, Identification, RotatingFit, identify
+from vfmodel.greybox.joint import SHARED
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
@@ -55,6 +61,8 @@ from vfmodel.greybox.metrics import (
     spectral_corr_periodogram,
 )
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.path_prior import with_path_prior
+from vfmodel.greybox.priors import parameter_priors
 from vfmodel.greybox.propagate import with_machine_uncertainty
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
@@ -169,6 +177,12 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     # 95 % intervals of the divider capacitances from the last machine stage
     mach = [s for s in ident.stages if s.cov_log is not None
             and not s.name.startswith("lubricant")]
+    if mach and "metallic_contact" in eff:
+        # the closed contact lets the standstill data fix only C_wr times the rotor
+        # current's path: that path (and what the contact hides) is known only through
+        # its physics prior (vfmodel.greybox.path_prior)
+        mach[-1] = with_path_prior(mach[-1], ident.params, parameter_priors(dataset, 0.0),
+                                   held=STANDSTILL_HIDDEN)
     divider_iv: dict[str, Any] = {}
     if mach:
         for key in ("c_wr", "c_rf"):
@@ -209,7 +223,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             # 95 % intervals (delta method on the stage's posterior covariance of log p),
             # with the uncertainty of the machine the lubricant was fitted on
             rep = sf.report if not mach else with_machine_uncertainty(
-                sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1])
+                sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1],
+                machine_names=(*SHARED, *(n for n in STANDSTILL_HIDDEN if n not in SHARED)))
             entry["lubricant_interval"] = {
                 "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
                 "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
