@@ -370,6 +370,28 @@ def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
     assert model.n_poles == anchored.n_poles
 
 
+def test_plateau_pick_of_fewer_poles_is_converged_first() -> None:
+    # wr2p2,line1.s2p (noise-free, 101 points): the growth plateaus at the best error of
+    # unconverged steps (~2.9e-6) and the smallest order within 1.25x of it was kept, 8
+    # poles at 2.2e-6; relocated to convergence, the pick beats that plateau by more than
+    # the margin and becomes the floor: 9 poles at 9.0e-7 (Haswell, Prescott and
+    # Sandybridge kernels). Reference: scikit-rf's auto_fit on the same file (8.2e-7),
+    # within the order rule's own margin (1.25x of the floor it reaches).
+    name = "wr2p2,line1.s2p"
+    net = skrf.Network(str(SKRF_DATA / name))
+    data = read_spectrum(SKRF_DATA / name).to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, rep = vector_fit(data, delay="auto")
+        vf = skrf.vectorFitting.VectorFitting(net)
+        vf.auto_fit()
+    n = data.n_out
+    ref = np.stack([[vf.get_model_response(i, j, data.freq_hz) for j in range(n)]
+                    for i in range(n)]).transpose(2, 0, 1)
+    err_skrf = float(np.linalg.norm(ref - data.values) / np.linalg.norm(data.values))
+    assert rep.rel_rms_error <= 1.25 * err_skrf
+
+
 def test_lighter_fit_not_taken_when_it_leaves_the_data_size() -> None:
     # coaxial.s2p: relocated with lighter anchors the model reaches a gain of ~2.5 out of
     # band (data <= 0.9986); the model returned keeps the anchored fit's gain at 0 Hz,
