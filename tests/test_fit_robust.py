@@ -347,6 +347,19 @@ def test_delay_exported_as_lossless_lines(tmp_path: Path) -> None:
 
 
 # ---------------------------------------------------------------------- noise-free data
+def _skrf_auto_fit_error(name: str, data: FrequencyData) -> float:
+    """Relative RMS error of scikit-rf's ``auto_fit`` on the file ``name`` (same measure
+    as vfmodel's ``rel_rms_error``)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        vf = skrf.vectorFitting.VectorFitting(skrf.Network(str(SKRF_DATA / name)))
+        vf.auto_fit()
+    n = data.n_out
+    ref = np.stack([[vf.get_model_response(i, j, data.freq_hz) for j in range(n)]
+                    for i in range(n)]).transpose(2, 0, 1)
+    return float(np.linalg.norm(ref - data.values) / np.linalg.norm(data.values))
+
+
 @pytest.mark.parametrize("name", ["ntwk1.s2p", "open.s2p", "short.s2p", "wr2p2,line.s2p"])
 def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
     # simulated (noise-free) files: the out-of-band anchors and the ridge that hold the
@@ -354,18 +367,11 @@ def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
     # must reach scikit-rf's auto_fit on the same file (same error measure, 1.1x or 1e-9).
     # wr2p2,line: a growth step 9 -> 13 poles fitting worse is retried with one pair
     # (before: a 'plateau' at 8 poles, 2.1e-6 against scikit-rf's 8.0e-7)
-    net = skrf.Network(str(SKRF_DATA / name))
     data = read_spectrum(SKRF_DATA / name).to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model, rep = vector_fit(data, delay="auto")
-        vf = skrf.vectorFitting.VectorFitting(net)
-        vf.auto_fit()
-    n = data.n_out
-    ref = np.stack([[vf.get_model_response(i, j, data.freq_hz) for j in range(n)]
-                    for i in range(n)]).transpose(2, 0, 1)
-    err_skrf = float(np.linalg.norm(ref - data.values) / np.linalg.norm(data.values))
-    assert rep.rel_rms_error <= max(1.1 * err_skrf, 1e-9)
+    assert rep.rel_rms_error <= max(1.1 * _skrf_auto_fit_error(name, data), 1e-9)
     anchored, _ = vector_fit(data, delay="auto", out_of_band_weight=1e-4)
     assert model.n_poles == anchored.n_poles
 
@@ -378,18 +384,11 @@ def test_plateau_pick_of_fewer_poles_is_converged_first() -> None:
     # Sandybridge kernels). Reference: scikit-rf's auto_fit on the same file (8.2e-7),
     # within the order rule's own margin (1.25x of the floor it reaches).
     name = "wr2p2,line1.s2p"
-    net = skrf.Network(str(SKRF_DATA / name))
     data = read_spectrum(SKRF_DATA / name).to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         _, rep = vector_fit(data, delay="auto")
-        vf = skrf.vectorFitting.VectorFitting(net)
-        vf.auto_fit()
-    n = data.n_out
-    ref = np.stack([[vf.get_model_response(i, j, data.freq_hz) for j in range(n)]
-                    for i in range(n)]).transpose(2, 0, 1)
-    err_skrf = float(np.linalg.norm(ref - data.values) / np.linalg.norm(data.values))
-    assert rep.rel_rms_error <= 1.25 * err_skrf
+    assert rep.rel_rms_error <= 1.25 * _skrf_auto_fit_error(name, data)
 
 
 def test_lighter_fit_not_taken_when_it_leaves_the_data_size() -> None:
