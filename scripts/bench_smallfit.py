@@ -13,7 +13,6 @@ tool's automatic order (every pole counted) and relative RMS error
 from __future__ import annotations
 
 import argparse
-import fnmatch
 import os
 import statistics
 import sys
@@ -27,14 +26,10 @@ _SMALL = (2, 2000)  # ports, points
 
 
 def _files(pattern: str | None, agilent: bool) -> list[Path]:
-    import skrf
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from vfbench import _files as vfbench_files  # the files vfbench runs
 
-    out = sorted(p for p in (Path(skrf.__file__).parent / "data").iterdir()
-                 if p.suffix.lower()[:2] == ".s")
-    out += sorted(p for p in (ROOT / "data" / "vfbench").iterdir()
-                  if p.suffix.lower()[:2] == ".s" and p.suffix.lower().endswith("p"))
-    if pattern:
-        out = [p for p in out if fnmatch.fnmatch(p.name, pattern)]
+    out = vfbench_files([], pattern)
     if agilent:
         out.append(ROOT / "data" / "touchstone" / "Agilent_E5071B.s4p")
     return out
@@ -52,6 +47,7 @@ def main() -> int:
     import skrf
 
     sys.path.insert(0, str(ROOT))
+    from benches.skrf_reference import skrf_response
     from vfmodel.fitting.vectfit import vector_fit
 
     warnings.simplefilter("ignore")
@@ -85,8 +81,7 @@ def main() -> int:
         f, h = net.f, net.s
         model, _ = out_vf
         err_vf = float(np.linalg.norm(model(f) - h) / np.linalg.norm(h))
-        h_sk = np.stack([[out_sk.get_model_response(i, j, f) for j in range(n)]
-                         for i in range(n)]).transpose(2, 0, 1)
+        h_sk = skrf_response(out_sk, f)
         err_sk = float(np.linalg.norm(h_sk - h) / np.linalg.norm(h))
         n_sk = int(np.sum(out_sk.poles.imag == 0) + 2 * np.sum(out_sk.poles.imag != 0))
         tv, ts = statistics.median(t_vf), statistics.median(t_sk)

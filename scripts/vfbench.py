@@ -145,11 +145,10 @@ def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any) -> dict[str, 
         vf.auto_fit()
         return vf
 
-    n = h.shape[1]
+    from benches.skrf_reference import skrf_response
 
     def resp(vf: Any) -> Any:
-        return np.stack([[vf.get_model_response(i, j, f) for j in range(n)]
-                         for i in range(n)]).transpose(2, 0, 1)
+        return skrf_response(vf, f)
 
     vf, t = _median_time(fit, runs)
     row: dict[str, Any] = {

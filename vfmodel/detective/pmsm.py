@@ -7,7 +7,8 @@ every effect the starting network lacks, each at the one place of the network wh
 applies (:data:`LOCATIONS`). The network is identified first by the staged grey-box
 identification (:func:`vfmodel.greybox.identify.identify`: impedance spectra, standstill
 H1, lubricant per speed) and then refitted jointly on every channel by the detective; an
-accepted network is identified the same way again (:meth:`PmsmFamily.restart`) and the
+accepted network whose effect explained at least half of the misfit is identified the same
+way again (:meth:`PmsmFamily.restart`, called by ``detective.diagnose._restarted``) and the
 better of that refit and the warm-started one kept.
 
 Channels (the data the detective compares with):
