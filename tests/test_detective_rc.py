@@ -138,6 +138,21 @@ def test_concealed_dielectric_loss_is_found_at_c2(concealed: tuple[UserFamily, D
     json.dumps(doc, allow_nan=False)
 
 
+def test_heldout_scored_only_where_the_bic_supports(concealed: tuple[UserFamily, Diagnosis]
+                                                    ) -> None:
+    # the first round (a mismatch to explain): a held-out score exactly for the candidates
+    # with Delta BIC < -10 (bic_min); the others are rejected without one
+    _, d = concealed
+    first = d.trials[0]
+    assert any(t.delta_bic < -10 for t in first) and any(t.delta_bic >= -10 for t in first)
+    for t in first:
+        assert np.isfinite(t.heldout_delta_chi2) == (t.delta_bic < -10), t.candidate.key
+    assert d.findings[0].trial.heldout_delta_chi2 < -2      # its 2 new parameters
+    for c, why in d.rejected:
+        if c.key in {t.candidate.key for t in first if t.delta_bic >= -10}:
+            assert "held-out Delta" not in why, why
+
+
 def test_null_case_is_clean() -> None:
     fam = user_family(read_user_model(MODEL), CASES / "rc_null")
     d = diagnose(fam)

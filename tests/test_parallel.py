@@ -16,7 +16,7 @@ from pathlib import Path
 from tests.conftest import REPO
 
 SCRIPT = textwrap.dedent("""
-    import json, os, sys
+    import json, os, sys, time
     sys.path.insert(0, {repo!r})
     from benches.small_dataset import make_small_dataset
     from vfmodel.core.io_dataset import read_dataset
@@ -26,6 +26,10 @@ SCRIPT = textwrap.dedent("""
     def job(k, prog):
         return (k, os.getpid())
 
+    def slow(k, prog):
+        time.sleep(0.5)
+        return (k, os.getpid())
+
     out = {{"parent": os.getpid()}}
     ds = read_dataset(make_small_dataset({root!r}, seed=1, n_samples=4096))
     for w in ("1", "2"):
@@ -33,6 +37,7 @@ SCRIPT = textwrap.dedent("""
         out["workers" + w] = workers(2)
         out["map" + w] = parallel_map(job, 3)
         out["first" + w] = parallel_map(job, 3, first=[2])
+        out["per_core" + w] = parallel_map(slow, 3, per_core=2)
         idf = identify(ds)
         out["params" + w] = [float(v) for v in idf.params.values]
         out["chi2" + w] = [s.chi2_red for s in idf.stages]
@@ -53,6 +58,9 @@ def test_forked_fits_equal_the_sequential_ones(tmp_path: Path) -> None:
     # a job handed out first: results still in index order
     assert [k for k, _ in out["first1"]] == [0, 1, 2] == [k for k, _ in out["first2"]]
     assert {pid for _, pid in out["map1"]} == {out["parent"]}
+    # two per core on two cores: three jobs at once, each in its own process
+    assert [k for k, _ in out["per_core2"]] == [0, 1, 2]
+    assert len({pid for _, pid in out["per_core2"]} - {out["parent"]}) == 3
     assert out["parent"] not in {pid for _, pid in out["map2"]}
     # the same arithmetic in another process: identical to rounding (1e-12 relative)
     for a, b in zip(out["params1"], out["params2"], strict=True):

@@ -60,15 +60,19 @@ class JobPool(Generic[T]):
         nw = parallel.workers(n_jobs)
         if nw > 1:
             ctx = mp.get_context("fork")
-            for w in range(nw):
-                jobs = list(range(w, n_jobs, nw))
-                here, there = ctx.Pipe()
-                p = ctx.Process(target=_serve, args=(there, fn, jobs), daemon=True)
-                p.start()
-                there.close()
-                self._conns.append(here)
-                self._procs.append(p)
-                self._jobs.append(jobs)
+            with parallel.frozen_heap():
+                self._fork(ctx, fn, n_jobs, nw)
+
+    def _fork(self, ctx: Any, fn: Callable[[int, Any], T], n_jobs: int, nw: int) -> None:
+        for w in range(nw):
+            jobs = list(range(w, n_jobs, nw))
+            here, there = ctx.Pipe()
+            p = ctx.Process(target=_serve, args=(there, fn, jobs), daemon=True)
+            p.start()
+            there.close()
+            self._conns.append(here)
+            self._procs.append(p)
+            self._jobs.append(jobs)
 
     @property
     def processes(self) -> int:
