@@ -67,6 +67,9 @@ def run_case(root: Path, name: str, case: dict[str, Any]) -> tuple[dict[str, Any
 
 
 def main(argv: list[str] | None = None) -> int:
+    from vfmodel.core.allocator import keep_large_blocks
+
+    keep_large_blocks()         # as the CLI does
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", default=str(ROOT / "data" / "concealed"))
     ap.add_argument("--only", default=None, help="comma-separated case names")

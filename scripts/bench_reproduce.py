@@ -40,6 +40,9 @@ from vfmodel.greybox.effects import SECTIONS
 
 
 def main(argv: list[str] | None = None) -> int:
+    from vfmodel.core.allocator import keep_large_blocks
+
+    keep_large_blocks()         # as the CLI does
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", nargs="?", default="data/pmsm40kw")
     ap.add_argument("--out", default=None, help="output directory (default: a temp dir)")

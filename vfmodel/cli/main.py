@@ -75,9 +75,14 @@ def main(argv: list[str] | None = None) -> int:
 
     BLAS threads are capped (:func:`blas_threads`): through the environment for the
     libraries loaded from now on (numpy's and scipy's OpenBLAS are separate) and with
-    threadpoolctl for those already loaded; both are restored on return.
+    threadpoolctl for those already loaded; both are restored on return. Large freed
+    arrays stay in the heap (:func:`vfmodel.core.allocator.keep_large_blocks`).
     """
     import warnings
+
+    from vfmodel.core.allocator import keep_large_blocks
+
+    keep_large_blocks()
 
     n = str(blas_threads())
     saved = {k: os.environ.get(k) for k in BLAS_ENV}
