@@ -18,7 +18,7 @@ import pytest
 from tests.conftest import REPO
 
 SCRIPT = textwrap.dedent("""
-    import json, os, sys
+    import json, os, sys, time
     sys.path.insert(0, {repo!r})
     from vfmodel.core.job_pool import JobPool
 
@@ -46,6 +46,13 @@ SCRIPT = textwrap.dedent("""
         out["error"] = None
     except ValueError as exc:
         out["error"] = str(exc)
+    def slow(k, arg):                           # jobs 0, 2, 4 take 5x as long as 1, 3
+        time.sleep(0.05 if k % 2 == 0 else 0.01)
+        return k, os.getpid()
+
+    with JobPool(slow, 5) as pool:
+        out["slow1"] = pool.map(0)
+        out["slow2"] = pool.map(0)
     os.environ["VFMODEL_WORKERS"] = "1"
     with JobPool(job, 3) as pool:
         out["seq_processes"] = pool.processes
@@ -70,6 +77,13 @@ def test_job_pool_in_a_fresh_interpreter() -> None:
     assert pids == {pid for *_, pid in out["second"]} and len(pids) == 2
     assert parent not in pids and out["calls_here"] == 0    # nothing ran in the parent
     assert out["error"] == "job 3 failed on 7"
+    # round-robin first (0, 2, 4 in one worker: 0.15 s against 0.02 s), then dealt by
+    # the measured times (balanced: 0, 4 | 1, 2, 3, 0.10 s against 0.07 s)
+    pid1 = {k: pid for k, pid in out["slow1"]}
+    pid2 = {k: pid for k, pid in out["slow2"]}
+    assert pid1[0] == pid1[2] == pid1[4] != pid1[1] == pid1[3]
+    assert pid2[0] == pid2[4] != pid2[2] and pid2[1] == pid2[2] == pid2[3]
+    assert [k for k, _ in out["slow2"]] == [0, 1, 2, 3, 4]
     assert out["seq_processes"] == 0
     assert [v for v, _, _ in out["seq"]] == [0, 1, 2]
     assert {pid for *_, pid in out["seq"]} == {parent}
@@ -120,3 +134,16 @@ def test_pmsm_terms_in_the_pool_equal_the_sequence(tmp_path: Path) -> None:
     out = json.loads(run.stdout.strip().splitlines()[-1])
     assert out["procs"] == [2] and out["left"] == 0 and out["hit"]
     assert out["dr"] <= 1e-12 and out["dj"] <= 1e-12
+
+
+def test_balanced_deals_longest_first_to_the_least_loaded() -> None:
+    from vfmodel.core.job_pool import balanced
+
+    # LPT by hand: 0 -> w0 (5), 2 -> w1 (5), 4 -> w0 (10), 1 -> w1 (6), 3 -> w1 (7)
+    assert balanced([5.0, 1.0, 5.0, 1.0, 5.0], 2) == [[0, 4], [1, 2, 3]]
+    # the terms of bench 105's refit (ms): round-robin 423 | 332; LPT 360 | 395 (by hand:
+    # 141, 114, 105 | 117, 115, 113, 50), more than REBALANCE_GAIN shorter
+    took = [50.0, 105.0, 115.0, 114.0, 117.0, 113.0, 141.0]
+    groups = balanced(took, 2)
+    assert groups == [[1, 3, 6], [0, 2, 4, 5]]
+    assert max(sum(took[k] for k in g) for g in groups) == 395.0 < 0.95 * 423.0

@@ -58,6 +58,7 @@ from numpy.typing import NDArray
 from vfmodel._choices import BearingState
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.job_pool import JobPool
 from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
@@ -261,11 +262,18 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     # one value map for every term (same structure; state and sources add no parameters)
     lmap = log_map(params, names, terms[0][0].spec)
 
+    def job(k: int, arg: tuple[ParamSet, bool]) -> tuple[ArrF, ArrF | None]:
+        p, want_jac = arg
+        term = terms[k][0]
+        return term.residual(p, names, jac=True, lmap=lmap) if want_jac \
+            else (term.residual(p)[0], None)
+
     def fun(x: ArrF) -> ArrF:
         key = x.tobytes()
         if key not in rcache:
             p = params.from_log(x, names)
-            rs = [wgt * term.residual(p)[0] for term, wgt in terms]
+            rs = [wgt * r for (r, _), (_, wgt) in zip(pool.map((p, False)), terms,
+                                                      strict=True)]
             if prior_sigma > 0:
                 # weak prior towards the start: holds directions the data do not see
                 rs.append((x - x0) / prior_sigma)
@@ -284,8 +292,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
             if asking[0] is not None and asking[0](p, accepted[0], count[0]):
                 raise StageAbandoned(stage)
             js = []
-            for term, wgt in terms:
-                _, j = term.residual(p, names, jac=True, lmap=lmap)
+            for (_, j), (_, wgt) in zip(pool.map((p, True)), terms, strict=True):
                 assert j is not None
                 js.append(wgt * j)
             if prior_sigma > 0:
@@ -295,11 +302,14 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
         return jcache[key]
 
     progress(stage, 0, max_nfev)
-    res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-7, ftol=1e-6,
-                  compress=None)
-    asking[0] = None
-    progress(stage, max_nfev, max_nfev)
-    r, jm = fun(res.x), jac(res.x)
+    # several terms (the standstill stage: spectra and record) are evaluated side by side
+    # in persistent workers (JobPool; in sequence inside a worker or with one term)
+    with JobPool(job, len(terms)) as pool:
+        res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-7, ftol=1e-6,
+                      compress=None)
+        asking[0] = None
+        progress(stage, max_nfev, max_nfev)
+        r, jm = fun(res.x), jac(res.x)
     dof = max(r.size - len(names), 1)
     chi2 = float(r @ r) / dof
     p_out = params.from_log(res.x, names)

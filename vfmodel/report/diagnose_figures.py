@@ -14,7 +14,7 @@ from vfmodel.core.parallel import parallel_calls
 from vfmodel.detective.diagnose import Diagnosis, residual_by_channel
 from vfmodel.detective.problem import Channel, Family
 from vfmodel.greybox.objective import PreparedRecording
-from vfmodel.report._mpl import pyplot, save
+from vfmodel.report._mpl import envelope, pyplot, save
 from vfmodel.report.diagnose_html import write_diagnose_html
 
 __all__ = ["write_diagnose_figures", "write_diagnose_html"]
@@ -41,6 +41,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
         for k in range(len(family.channels))]
     jobs.append(partial(_pole_map, family, d, out))
     jobs += _waveform_jobs(family, d, out)
+    pyplot()        # imported once here, inherited by the figure processes
     drawn = parallel_calls(jobs)
     return [name for names in drawn for name in names]
 
@@ -148,10 +149,11 @@ def _waveform(p: PreparedRecording, a: ArrF, b: ArrF, found: bool, out: Path) ->
     half = min(int(10e-6 * p.fs), t.size // 2)
     z = slice(max(k - half, 0), min(k + half, t.size))
     for ax, sl in ((axs[0], slice(None)), (axs[1], z)):
-        ax.plot(t[sl] * 1e6, p.bearing[sl], color="0.6", lw=0.6,
+        ts = t[sl] * 1e6
+        ax.plot(*envelope(ts, p.bearing[sl]), color="0.6", lw=0.6,
                 label="recording (10 MHz filtered)")
-        ax.plot(t[sl] * 1e6, a[sl], "-", lw=1.0, label="starting network")
-        ax.plot(t[sl] * 1e6, b[sl], "--", lw=1.0, label="after the detective")
+        ax.plot(*envelope(ts, a[sl]), "-", lw=1.0, label="starting network")
+        ax.plot(*envelope(ts, b[sl]), "--", lw=1.0, label="after the detective")
         ax.set_ylabel("u_B (V)")
         ax.grid(True, alpha=0.3)
     axs[0].legend(fontsize=8)

@@ -14,7 +14,7 @@ import numpy as np
 
 from vfmodel.core.parallel import parallel_calls
 from vfmodel.pipeline.reproduce import ReproduceResult, SpeedResult, rpm_key
-from vfmodel.report._mpl import pyplot, save
+from vfmodel.report._mpl import envelope, pyplot, save
 from vfmodel.signals.filters import F_CUT_HZ
 
 __all__ = ["write_figures"]
@@ -61,10 +61,11 @@ def _bearing(s: SpeedResult, out: Path, baseline: bool) -> str:
     t = np.arange(s.u_meas.size) / s.fs
     a, b = _zoom_window(s)
     fig, (ao, az) = plt.subplots(2, 1, figsize=(9, 7))
-    ao.plot(t * 1e3, s.u_meas, lw=0.6, label="measured (10 MHz filter)")
-    ao.plot(t * 1e3, s.u_model, lw=0.6, label="grey-box model")
+    ao.plot(*envelope(t * 1e3, s.u_meas), lw=0.6, label="measured (10 MHz filter)")
+    ao.plot(*envelope(t * 1e3, s.u_model), lw=0.6, label="grey-box model")
     if baseline:
-        ao.plot(t * 1e3, s.u_bvr, lw=0.6, label=f"BVR model ({100 * s.baseline.bvr:.3g} %)")
+        ao.plot(*envelope(t * 1e3, s.u_bvr), lw=0.6,
+                label=f"BVR model ({100 * s.baseline.bvr:.3g} %)")
     ao.set_xlabel("time (ms)")
     ao.set_ylabel("u_B (V)")
     ao.set_title(f"bearing voltage at {s.speed_rpm:g} rpm: overall")
@@ -211,6 +212,7 @@ def write_figures(res: ReproduceResult, out: Path) -> list[str]:
     jobs += [partial(_names, _bearing, s, out, True)
              for s in (res.speeds[:2] if len(res.speeds) > 1 else res.speeds)]
     jobs.append(partial(_names, _blackbox, res, out))
+    pyplot()        # imported once here, inherited by the figure processes
     drawn = parallel_calls(jobs)
     return [name for names in drawn for name in names]
 
