@@ -78,11 +78,15 @@ def test_job_pool_in_a_fresh_interpreter() -> None:
     assert parent not in pids and out["calls_here"] == 0    # nothing ran in the parent
     assert out["error"] == "job 3 failed on 7"
     # round-robin first (0, 2, 4 in one worker: 0.15 s against 0.02 s), then dealt by
-    # the measured times (balanced: 0, 4 | 1, 2, 3, 0.10 s against 0.07 s)
+    # the measured times (two slow jobs | one slow and both fast ones, 0.10 s against
+    # 0.07 s; which slow jobs go together depends on their measured times)
     pid1 = {k: pid for k, pid in out["slow1"]}
     pid2 = {k: pid for k, pid in out["slow2"]}
     assert pid1[0] == pid1[2] == pid1[4] != pid1[1] == pid1[3]
-    assert pid2[0] == pid2[4] != pid2[2] and pid2[1] == pid2[2] == pid2[3]
+    slow = [pid2[k] for k in (0, 2, 4)]
+    alone = [p for p in set(slow) if slow.count(p) == 1]
+    assert len(set(slow)) == 2 and len(alone) == 1
+    assert pid2[1] == pid2[3] == alone[0]
     assert [k for k, _ in out["slow2"]] == [0, 1, 2, 3, 4]
     assert out["seq_processes"] == 0
     assert [v for v, _, _ in out["seq"]] == [0, 1, 2]

@@ -134,12 +134,8 @@ def _solve_each(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -
     for k, sk in enumerate(s):
         dc_only = bool(sk == 0)
         if dc_only not in patterns:
-            # column-major nonzeros = canonical CSC order (sorted rows in each column)
-            mask = (g != 0) if dc_only else ((g != 0) | (c != 0))
-            cols, rows = np.nonzero(mask.T)
-            indptr = np.zeros(n + 1, dtype=np.intc)
-            np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
-            patterns[dc_only] = (g[rows, cols], c[rows, cols], rows.astype(np.intc), indptr)
+            rows, cols, indptr = _csc((g != 0) if dc_only else ((g != 0) | (c != 0)))
+            patterns[dc_only] = (g[rows, cols], c[rows, cols], rows, indptr)
         gv, cv, ind, ptr = patterns[dc_only]
         try:
             lu = _splu(gv + sk * cv, ind, ptr, n)
@@ -151,6 +147,17 @@ def _solve_each(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF, adjoint: bool) -
             x[k] = xk
             lam[k] = lu.solve(cc, trans="T")
     return Solution(h, x, lam, "sparse")
+
+
+def _csc(mask: NDArray[np.bool_]) -> tuple[NDArray[np.intc], NDArray[np.intp],
+                                            NDArray[np.intc]]:
+    """Row indices, column indices and column pointers of the nonzeros of ``mask`` in
+    canonical CSC order (column-major, sorted rows in each column)."""
+    n = mask.shape[0]
+    cols, rows = np.nonzero(mask.T)
+    indptr = np.zeros(n + 1, dtype=np.intc)
+    np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
+    return rows.astype(np.intc), cols, indptr
 
 
 def _splu(vals: ArrC, ind: NDArray[np.intc], ptr: NDArray[np.intc], n: int) -> Any:
@@ -238,14 +245,12 @@ def _solve_batched(g: ArrF, c: ArrF, s: ArrC, b: ArrF, cout: ArrF,
     every frequency; frequencies whose backward error fails are solved again one by one
     with pivoting (:func:`_solve_each`). None when the reference factorisation fails."""
     n = g.shape[0]
-    w = np.abs(s.imag)
-    s_ref = 1j * float(np.sqrt(w.min() * w.max())) if w.min() > 0 else 1j * float(w.max())
+    w = np.abs(s)
+    s_ref = 1j * float(np.sqrt(w.min() * w.max()))          # s != 0 here (solve_sparse)
     mask = (g != 0) | (c != 0)
-    cols, rows = np.nonzero(mask.T)
-    ptr = np.zeros(n + 1, dtype=np.intc)
-    np.cumsum(np.bincount(cols, minlength=n), out=ptr[1:])
+    rows, cols, ptr = _csc(mask)
     try:
-        lu = _splu(g[rows, cols] + s_ref * c[rows, cols], rows.astype(np.intc), ptr, n)
+        lu = _splu(g[rows, cols] + s_ref * c[rows, cols], rows, ptr, n)
     except RuntimeError:
         return None
     # SuperLU: Pr A Pc = L U with Pr[perm_r[i], i] = 1, Pc[i, perm_c[i]] = 1

@@ -185,8 +185,9 @@ def _heldout(family: Family, base: FitResult, trials: list[Trial], nfev: int,
     """``trials`` with their held-out score: the base and each candidate refitted on the
     even points of every channel (warm-started at their full-data optimum), the difference
     of their chi-squares on the odd points. Run only for the candidates the BIC supports:
-    the others are rejected whatever the score (the base's and two candidates' even fits
-    took 12 s of CPU in each round of bench 105)."""
+    the others are rejected whatever the score (on bench 105 the base's and two
+    candidates' even fits took 11.5 s of CPU in the first round, the base's and one
+    candidate's 4 s in the second, where no candidate was supported)."""
     fits = [base] + [t.fit for t in trials]
 
     def job(i: int, _prog: Progress) -> float:
