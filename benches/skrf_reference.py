@@ -1,5 +1,6 @@
 """scikit-rf's vector fitting as the reference of the benchmarks and tests: the response
-of a fitted ``skrf.vectorFitting.VectorFitting`` on any frequencies, in vfmodel's layout."""
+of a fitted ``skrf.vectorFitting.VectorFitting`` on any frequencies, in vfmodel's layout,
+and its order counted as vfmodel counts it."""
 
 from __future__ import annotations
 
@@ -15,6 +16,13 @@ def skrf_response(vf: Any, freq_hz: ArrayLike) -> NDArray[np.complex128]:
     n = int(vf.network.nports)
     out = np.stack([[vf.get_model_response(i, j, f) for j in range(n)] for i in range(n)])
     return np.asarray(out.transpose(2, 0, 1), dtype=np.complex128)
+
+
+def skrf_order(vf: Any) -> int:
+    """Order of the fitted ``vf`` counted as vfmodel counts it: every pole (a complex pair
+    is two)."""
+    poles = np.asarray(vf.poles)
+    return int(np.sum(poles.imag == 0) + 2 * np.sum(poles.imag != 0))
 
 
 def skrf_auto_fit_error(path: str, values: ArrayLike, freq_hz: ArrayLike) -> float:

@@ -47,7 +47,7 @@ def main() -> int:
     import skrf
 
     sys.path.insert(0, str(ROOT))
-    from benches.skrf_reference import skrf_response
+    from benches.skrf_reference import skrf_order, skrf_response
     from vfmodel.fitting.vectfit import vector_fit
 
     warnings.simplefilter("ignore")
@@ -83,7 +83,7 @@ def main() -> int:
         err_vf = float(np.linalg.norm(model(f) - h) / np.linalg.norm(h))
         h_sk = skrf_response(out_sk, f)
         err_sk = float(np.linalg.norm(h_sk - h) / np.linalg.norm(h))
-        n_sk = int(np.sum(out_sk.poles.imag == 0) + 2 * np.sum(out_sk.poles.imag != 0))
+        n_sk = skrf_order(out_sk)
         tv, ts = statistics.median(t_vf), statistics.median(t_sk)
         if not big:
             ratios.append(tv / ts)

@@ -45,19 +45,12 @@ def main() -> int:
     import skrf
 
     sys.path.insert(0, str(ROOT))
+    from benches.skrf_reference import skrf_order, skrf_response
     from tests._motor_like import motor_like_impedance
     from tests._vf_models import known_model
     from vfmodel import FrequencyData, vector_fit
 
     warnings.simplefilter("ignore")
-
-    def skrf_response(vf: Any, freq: Any, n: int) -> Any:
-        return np.stack(
-            [[vf.get_model_response(i, j, freq) for j in range(n)] for i in range(n)]
-        ).transpose(2, 0, 1)
-
-    def skrf_order(vf: Any) -> int:
-        return int(np.sum(vf.poles.imag == 0) + 2 * np.sum(vf.poles.imag != 0))
 
     def rel(model_h: Any, data_h: Any) -> float:
         return float(np.linalg.norm(model_h - data_h) / np.linalg.norm(data_h))
@@ -106,8 +99,7 @@ def main() -> int:
             t0 = time.perf_counter()
             model, report = vector_fit(fd, "auto", **kw)
             t_vf.append(time.perf_counter() - t0)
-        n = fd.n_out
-        h_skrf = skrf_response(vf_skrf, fd.freq_hz, n)
+        h_skrf = skrf_response(vf_skrf, fd.freq_hz)
         ts, tv = statistics.median(t_skrf), statistics.median(t_vf)
         print(
             f"{name:<52} {ts:8.3f} {tv:8.3f} {ts / tv:7.1f} {skrf_order(vf_skrf):7d} "

@@ -145,14 +145,14 @@ def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any) -> dict[str, 
         vf.auto_fit()
         return vf
 
-    from benches.skrf_reference import skrf_response
+    from benches.skrf_reference import skrf_order, skrf_response
 
     def resp(vf: Any) -> Any:
         return skrf_response(vf, f)
 
     vf, t = _median_time(fit, runs)
     row: dict[str, Any] = {
-        "order": int(np.sum(vf.poles.imag == 0) + 2 * np.sum(vf.poles.imag != 0)),
+        "order": skrf_order(vf),
         "err": float(np.linalg.norm(resp(vf) - h) / np.linalg.norm(h)), "time": t,
     }
     if passive:

@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 import skrf  # noqa: E402
 from skrf.vectorFitting import VectorFitting  # noqa: E402
 
+from benches.skrf_reference import skrf_order, skrf_response  # noqa: E402
 from vfmodel import FrequencyData, vector_fit  # noqa: E402
 
 FILE = Path(__file__).resolve().parents[1] / "data" / "touchstone" / "Agilent_E5071B.s4p"
@@ -50,13 +51,9 @@ def race(runs: int = 5) -> dict[str, object]:
         model, report = vector_fit(fd, "auto")
         t_vf.append(time.perf_counter() - t0)
     assert vf is not None and model is not None and report is not None
-    n = fd.n_out
-    h_skrf = np.stack(
-        [[vf.get_model_response(i, j, fd.freq_hz) for j in range(n)] for i in range(n)]
-    ).transpose(2, 0, 1)
-    poles = vf.poles
+    h_skrf = skrf_response(vf, fd.freq_hz)
     return {
-        "skrf_order": int(np.sum(poles.imag == 0) + 2 * np.sum(poles.imag != 0)),
+        "skrf_order": skrf_order(vf),
         "vf_order": int(report.order),
         "skrf_rel_rms": rel_rms(h_skrf, fd.values),
         "vf_rel_rms": rel_rms(model(fd.freq_hz), fd.values),

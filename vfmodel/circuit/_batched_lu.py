@@ -66,7 +66,8 @@ class Plan:
 
     ``rows``, ``cols``: the permuted position of every stored entry; ``steps`` one per
     pivot; ``ucols[k]`` the rows and positions of U above the diagonal in column ``k`` (the
-    back substitution)."""
+    back substitution), ``urows[k]`` the columns and positions right of it in row ``k``
+    (the forward substitution with ``U^T``)."""
 
     n: int
     pr: ArrI
@@ -198,11 +199,11 @@ def backward_ok(g: ArrF, c: ArrF, s: ArrC, x: ArrC, b: ArrC, transposed: bool = 
     n_f, n, r = x.shape
     xs = x.transpose(1, 0, 2).reshape(n, n_f * r)              # columns (f, r)
     sc = np.repeat(s, r)
+    bs = np.tile(b, (1, n_f))
     with np.errstate(invalid="ignore", over="ignore"):
-        res = gs @ xs + sc[None, :] * (cs @ xs) - np.tile(b, (1, n_f))
-        err = np.abs(res).max(axis=0)
+        err = np.abs(gs @ xs + sc[None, :] * (cs @ xs) - bs).max(axis=0)
         a_norm = _inf_norm(g) + np.abs(sc) * _inf_norm(c)
-        bound = a_norm * np.abs(xs).max(axis=0) + np.abs(np.tile(b, (1, n_f))).max(axis=0)
+        bound = a_norm * np.abs(xs).max(axis=0) + np.abs(bs).max(axis=0)
         ok = np.isfinite(err) & (err <= RESIDUAL_TOL * bound)
     return np.asarray(ok.reshape(n_f, r).all(axis=1), dtype=bool)
 

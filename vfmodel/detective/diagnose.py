@@ -343,17 +343,18 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         unpolished = False
         trials = [replace(t, delta_chi2=t.fit.chi2 - cur.chi2, delta_bic=t.fit.bic - cur.bic)
                   for t in out[1:] if isinstance(t, Trial)]
+        open_ = bool(cur_mism) and len(findings) < max_findings   # a finding can be added
         supported = [t for t in trials if t.delta_bic < -bic_min]
-        if cur_mism and supported and len(findings) < max_findings:
-            scored = {id(t): h for t, h in zip(
-                supported, _heldout(family, cur, supported, h_nfev, progress), strict=True)}
-            trials = [scored.get(id(t), t) for t in trials]
+        if open_ and supported:
+            scored = {t.candidate.key: t
+                      for t in _heldout(family, cur, supported, h_nfev, progress)}
+            trials = [scored.get(t.candidate.key, t) for t in trials]
         rounds.append(tuple(trials))
         for t in trials:
             last[t.candidate.key] = t
         ok = [t for t in trials if t.delta_bic < -bic_min
               and t.heldout_delta_chi2 < -max(t.candidate.n_params, 1)]
-        if not cur_mism or not ok or len(findings) >= max_findings:
+        if not open_ or not ok:
             break
         best = min(ok, key=lambda t: t.delta_bic)
         alts = tuple(f"{t.candidate.effect} at {t.candidate.location}" for t in ok

@@ -281,10 +281,10 @@ class PmsmFamily:
                         names: Sequence[str] = ()) -> Iterator[None]:
         """Within the block, evaluations of the network ``applied`` run their terms (the
         impedances, each record) in persistent worker processes (:class:`JobPool`: forked
-        once, each term in the same worker from the second call on). The terms and the
-        log maps of ``names`` (the fitted parameters) are made here first, at ``params``,
-        so that the workers inherit them and every fit uses the maps of the first one (as
-        in sequence)."""
+        once; a term moves to another worker only when the measured times deal the terms
+        anew, :meth:`JobPool.map`). The terms and the log maps of ``names`` (the fitted
+        parameters) are made here first, at ``params``, so that the workers inherit them
+        and every fit uses the maps of the first one (as in sequence)."""
         key = _structure(self.base_effects, applied)
         imp, bts = self._terms(applied, params)
         jobs = ([-1] if imp is not None else []) + list(range(len(bts)))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,17 @@ def save(fig: Any, path: Path, dpi: int = 120) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format="png", bbox_inches="tight")
     pyplot().close(fig)
+
+
+def draw_side_by_side(jobs: Sequence[Callable[[], list[str]]]) -> list[str]:
+    """Run figure jobs (each draws and saves its figures, returns their file names) side by
+    side where :func:`vfmodel.core.parallel.parallel_calls` can; matplotlib is imported
+    here first, so that the forked processes inherit it instead of importing it each.
+    Returns every file name, in job order."""
+    from vfmodel.core.parallel import parallel_calls
+
+    pyplot()
+    return [name for names in parallel_calls(jobs) for name in names]
 
 
 ENVELOPE_POINTS = 2000

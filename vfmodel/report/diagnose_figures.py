@@ -10,11 +10,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel.core.parallel import parallel_calls
 from vfmodel.detective.diagnose import Diagnosis, residual_by_channel
 from vfmodel.detective.problem import Channel, Family
 from vfmodel.greybox.objective import PreparedRecording
-from vfmodel.report._mpl import envelope, pyplot, save
+from vfmodel.report._mpl import draw_side_by_side, envelope, pyplot, save
 from vfmodel.report.diagnose_html import write_diagnose_html
 
 __all__ = ["write_diagnose_figures", "write_diagnose_html"]
@@ -31,7 +30,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
     """Write the PNG figures to ``out``; returns their file names. The model predictions
     are computed here; the figures (two per channel, the pole map, one waveform per
     recording) are independent and drawn side by side in processes where
-    :func:`vfmodel.core.parallel.parallel_calls` can."""
+    :func:`vfmodel.report._mpl.draw_side_by_side` can."""
     r0 = residual_by_channel(family, d.start)
     r1 = residual_by_channel(family, d.final)
     p0 = family.predict(d.start.applied, d.start.params)
@@ -41,9 +40,7 @@ def write_diagnose_figures(family: Family, d: Diagnosis, out: Path) -> list[str]
         for k in range(len(family.channels))]
     jobs.append(partial(_pole_map, family, d, out))
     jobs += _waveform_jobs(family, d, out)
-    pyplot()        # imported once here, inherited by the figure processes
-    drawn = parallel_calls(jobs)
-    return [name for names in drawn for name in names]
+    return draw_side_by_side(jobs)
 
 
 def _channel_figures(c: Channel, d: Diagnosis, r0: ArrC, r1: ArrC, p0: ArrC, p1: ArrC,

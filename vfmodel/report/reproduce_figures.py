@@ -12,9 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from vfmodel.core.parallel import parallel_calls
 from vfmodel.pipeline.reproduce import ReproduceResult, SpeedResult, rpm_key
-from vfmodel.report._mpl import envelope, pyplot, save
+from vfmodel.report._mpl import draw_side_by_side, envelope, pyplot, save
 from vfmodel.signals.filters import F_CUT_HZ
 
 __all__ = ["write_figures"]
@@ -201,7 +200,7 @@ def _blackbox(res: ReproduceResult, out: Path) -> list[str]:
 def write_figures(res: ReproduceResult, out: Path) -> list[str]:
     """All figures into ``out``; returns their file names in report order. The figures
     are independent and drawn side by side in processes where
-    :func:`vfmodel.core.parallel.parallel_calls` can (each writes its own files)."""
+    :func:`vfmodel.report._mpl.draw_side_by_side` can (each writes its own files)."""
     rot = [s for s in res.speeds if s.speed_rpm > 0]
     jobs: list[partial[list[str]]] = [partial(_names, _impedance, res, out, g)
                                       for g in ("CM", "DM")]
@@ -212,9 +211,7 @@ def write_figures(res: ReproduceResult, out: Path) -> list[str]:
     jobs += [partial(_names, _bearing, s, out, True)
              for s in (res.speeds[:2] if len(res.speeds) > 1 else res.speeds)]
     jobs.append(partial(_names, _blackbox, res, out))
-    pyplot()        # imported once here, inherited by the figure processes
-    drawn = parallel_calls(jobs)
-    return [name for names in drawn for name in names]
+    return draw_side_by_side(jobs)
 
 
 def _names(fig: Callable[..., str | list[str] | None], *args: Any) -> list[str]:
