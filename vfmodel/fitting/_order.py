@@ -327,7 +327,7 @@ def auto_order(
         # relocated to convergence at the end anyway.
         conv = _relocate.iterate(prob, pick[2].reps, max_iterations=max_iterations, tol=tol,
                                  stable=stable, precise=None, patience=_FINAL_PATIENCE,
-                                 err_hint=pick[1])
+                                 err_hint=pick[1], target=best_err / margin)
         n_it += conv.n_iterations
         history.extend(conv.history)
         if conv.weighted_rel_rms * margin < best_err:

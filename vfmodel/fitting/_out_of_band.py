@@ -70,8 +70,9 @@ def lighter(
     trial = replace(prob, ridge=prob.ridge * _SCALE,
                     anchors=None if anchors is None
                     else (anchors[0], anchors[1], anchors[2] * _SCALE))
+    # kept only when it reaches err0 / _GAIN: given up once it cannot (iterate's target)
     res = _relocate.iterate(trial, coef.reps, max_iterations=max_iterations, tol=tol,
-                            stable=stable)
+                            stable=stable, target=err0 / _GAIN)
     err = core.weighted_rel_rms(trial, core.evaluate(trial, res.coef))
     if np.isfinite(err) and err * _GAIN <= err0 and _gain(trial, res.coef, n_ports) <= limit:
         return trial, res.coef
