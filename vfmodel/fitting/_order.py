@@ -173,15 +173,23 @@ def _backward_prune(
     reps = coef.reps
     sse = core.weighted_rel_rms(prob, core.evaluate(prob, coef)) ** 2 * den2
     removed = False
+    x, s_mat = core.removal_state(prob, reps)
+    cost = core.removal_costs(prob, reps, (x, s_mat))
     while reps.size > 1:
-        cost = core.removal_costs(prob, reps)
         # the order counts both poles of a pair: rank by the cost per pole removed
         j = int(np.argmin(cost / np.where(reps.imag == 0, 1.0, 2.0)))
         if sse + cost[j] > limit**2 * den2:
             break
         sse += float(cost[j])
-        reps = np.delete(reps, j)
         removed = True
+        # the next ranking by downdating the factorisation (exact), or factorised anew
+        nxt = core.drop_representative(x, s_mat, reps, j)
+        if nxt is None:
+            reps = np.delete(reps, j)
+            x, s_mat = core.removal_state(prob, reps)
+            cost = core.removal_costs(prob, reps, (x, s_mat))
+        else:
+            x, s_mat, reps, cost = nxt
     return core.solve_residues(prob, reps) if removed else coef
 
 

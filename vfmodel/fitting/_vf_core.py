@@ -133,6 +133,12 @@ class Problem:
         return {}
 
     @cached_property
+    def _costs(self) -> dict[bytes, FloatArray]:
+        """Cache of :func:`removal_costs` (the last pole set: the backward elimination and
+        the one-pole-less trial that follows it rank the same poles)."""
+        return {}
+
+    @cached_property
     def _s_all(self) -> ComplexArray:
         """The sample frequencies, then those of the anchors (common weights only)."""
         if self.w.shape[1] == 1 and self.anchors is not None:
@@ -537,7 +543,8 @@ def solve_residues(
     return Coefficients(reps=reps, c=x[:n].T.copy(), d=d, e=e)
 
 
-def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
+def removal_costs(prob: Problem, reps: ComplexArray,
+                  state: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
     """Increase of the weighted squared error ||W (H_model - H)||_F^2 when one
     representative (with its conjugate) is removed and the residues are re-solved, (n_rep,).
 
@@ -545,9 +552,25 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
     the squared residual by ``x_G^T (S_GG)^-1 x_G`` with ``S = (A^T A)^-1`` (the
     partial-F statistic of backward elimination), summed over the responses. ``S`` comes
     from the triangular factor of the column-scaled QR. Numerically rank-deficient
-    systems give 0 for the affected poles (they are redundant).
+    systems give 0 for the affected poles (they are redundant). ``state``: the
+    :func:`removal_state` of ``reps`` if already computed.
     """
-    n = n_poles(reps)
+    key = reps.tobytes()
+    hit = prob._costs.get(key)
+    if hit is not None:
+        return hit
+    out = _costs_of(*(removal_state(prob, reps) if state is None else state), reps)
+    out.setflags(write=False)  # shared through the cache
+    prob._costs.clear()
+    prob._costs[key] = out
+    return out
+
+
+def removal_state(prob: Problem, reps: ComplexArray) -> tuple[FloatArray, FloatArray]:
+    """Least-squares coefficients ``x`` (Mw, Nk, M or 1) of the residue system of ``reps``
+    in column-scaled coordinates and ``S = (A^T A)^-1`` (Mw, Nk, Nk) there (the ridge
+    left out): what :func:`removal_costs` ranks by and :func:`drop_representative`
+    updates."""
     sys_ = _residue_system(prob, reps, None)
     a = sys_.a if sys_.a.ndim == 3 else sys_.a[None]
     b = sys_.b.T[:, :, None] if sys_.a.ndim == 3 else sys_.b[None]  # (Mw, 2K, M or 1)
@@ -570,9 +593,20 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
             rinv = np.linalg.solve(r, np.broadcast_to(np.eye(nk), r.shape))
         x = rinv @ (np.swapaxes(q, 1, 2) @ b)  # (Mw, Nk, M or 1), scaled coordinates
         s_mat = rinv @ np.swapaxes(rinv, 1, 2)  # (Mw, Nk, Nk)
-        nr = reps.size - int(np.count_nonzero(reps.imag))
-        j1 = np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
-        cost = np.zeros(reps.size)
+    return x, s_mat
+
+
+def _columns(reps: ComplexArray) -> tuple[int, NDArray[np.intp]]:
+    """Number of real representatives and the first basis column of each one."""
+    nr = reps.size - int(np.count_nonzero(reps.imag))
+    return nr, np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
+
+
+def _costs_of(x: FloatArray, s_mat: FloatArray, reps: ComplexArray) -> FloatArray:
+    """:func:`removal_costs` from :func:`removal_state`."""
+    nr, j1 = _columns(reps)
+    cost = np.zeros(reps.size)
+    with np.errstate(all="ignore"):
         real_j = j1[:nr]
         cost[:nr] = np.sum(x[:, real_j, :] ** 2 / s_mat[:, real_j, real_j][:, :, None], axis=(0, 2))
         c1 = j1[nr:]
@@ -584,9 +618,31 @@ def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
         det = s11 * s22 - s12**2
         quad = (s22 * x1**2 - 2 * s12 * x1 * x2 + s11 * x2**2) / det
         cost[nr:] = np.sum(quad, axis=(0, 2))
-    del n
     out: FloatArray = np.where(np.isfinite(cost), np.maximum(cost, 0.0), 0.0)
     return out
+
+
+def drop_representative(
+    x: FloatArray, s_mat: FloatArray, reps: ComplexArray, j: int
+) -> tuple[FloatArray, FloatArray, ComplexArray, FloatArray] | None:
+    """Remove representative ``j`` from a :func:`removal_state` without a new
+    factorisation: with ``G`` its columns and ``r`` the others, the re-solved coefficients
+    are ``x_r - S_rG S_GG^-1 x_G`` and the new ``S`` the Schur complement
+    ``S_rr - S_rG S_GG^-1 S_Gr`` (the inverse of the remaining Gram matrix). Returns the
+    new state, the representatives left and their removal costs; None when ``S_GG`` is
+    singular (then factorise anew)."""
+    _, j1 = _columns(reps)
+    cols = [int(j1[j])] if reps[j].imag == 0 else [int(j1[j]), int(j1[j]) + 1]
+    keep = np.setdiff1d(np.arange(x.shape[1]), cols)
+    s_gg = s_mat[:, cols][:, :, cols]
+    if not np.all(np.isfinite(s_gg)) or np.any(np.linalg.cond(s_gg) > 1e12):
+        return None
+    inv = np.linalg.inv(s_gg)
+    s_rg = s_mat[:, keep][:, :, cols]
+    x_new = x[:, keep] - s_rg @ (inv @ x[:, cols])
+    s_new = s_mat[:, keep][:, :, keep] - s_rg @ inv @ np.swapaxes(s_rg, 1, 2)
+    rest = np.delete(reps, j)
+    return x_new, s_new, rest, _costs_of(x_new, s_new, rest)
 
 
 def pole_contributions(prob: Problem, coef: Coefficients) -> FloatArray:
