@@ -413,6 +413,17 @@ def bearing_capacitance(d: Draw, speed: float, size: float, freq_hz: float = 100
     return float((1.0 / z).imag / (2 * np.pi * freq_hz))
 
 
+def cm_transfer(d: Draw, speed: float, freq_hz: float = 100e3) -> float:
+    """``|u_SN / u_CM|`` at ``freq_hz``: the NDE shaft-end voltage (the recorded bearing
+    voltage) per volt of common-mode voltage at the machine terminals (U, V, W driven
+    alike, the cable not in the path: the records' inputs are the terminal voltages)."""
+    src = tuple(f"cm.{ph}" for ph in PHASES)
+    net = machine(d, speed).extend(
+        [Element(n, "vsource", (ph, "0"), 1.0) for n, ph in zip(src, PHASES, strict=True)])
+    h = net.mna.response([freq_hz], src, ("SN",))
+    return float(abs(np.sum(h[0, 0, :])))
+
+
 def equivalents(d: Draw, speed: float) -> dict[str, float]:
     """Truth quantities comparable with the grey-box model's parameters.
 
@@ -422,7 +433,8 @@ def equivalents(d: Draw, speed: float) -> dict[str, float]:
     each contact oil and thickener in series), averaged over the two bearings (the model's
     bearings are identical); ``c_b_100khz_f``: the effective capacitance of a bearing at
     100 kHz (network admittance, mean of the two bearings); ``film_r_ohm``: twice the DC
-    resistance of the two bearings' films in parallel (the model's per-bearing equivalent).
+    resistance of the two bearings' films in parallel (the model's per-bearing equivalent);
+    ``cm_transfer_100khz``: :func:`cm_transfer` at 100 kHz.
     """
     v = d.v
     kd = 1 + v["k1"] + v["k2"]
@@ -446,6 +458,7 @@ def equivalents(d: Draw, speed: float) -> dict[str, float]:
                                              for size in (1.0, v["de_size"])]))
         out["film_r_ohm"] = float(2 / sum(gs))
         out["c_b_f"] = float(np.mean(cbs))
+        out["cm_transfer_100khz"] = cm_transfer(d, speed)
     return out
 
 

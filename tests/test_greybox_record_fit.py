@@ -83,6 +83,30 @@ def test_truth_fits_to_the_noise_despite_a_non_periodic_record(record: Recording
     assert float(r0 @ r0) / r0.size > 5 * chi2
 
 
+def test_low_passed_record_fits_to_the_noise_with_uncorrelated_samples(
+        record: Recording) -> None:
+    prep = prepare_recording(record)
+    spec = NetSpec()
+    full = record_term(prep, spec, TRUTH, "rotating")
+    low = record_term(prep, spec, TRUTH, "rotating", f_max_hz=1e6)
+    # white noise limited to the lowest 1 MHz of the 10 MHz band: sigma * sqrt(1/10)
+    assert low.sigma == pytest.approx(full.sigma * np.sqrt(0.1), rel=0.02)
+    # compared about every (2 MHz)^-1 over the window (~1 ms): ~2,000 samples
+    window_s = full.n_residuals / prep.fs_h1
+    assert low.n_residuals == pytest.approx(2e6 * window_s, rel=0.1)
+    r, _ = low.residual(TRUTH)
+    assert r.size == low.n_residuals
+    chi2 = float(r @ r) / r.size
+    assert 0.8 < chi2 < 1.25, chi2  # measured 1.145
+    # at that spacing band-limited white noise is uncorrelated (Bartlett factor measured
+    # 1.002; the low-passed residual at the full H1 rate: 14.2)
+    assert low.correlation_factor(TRUTH) < 1.3
+    # a film 20 % off shows: the low band carries the film's R-C and the plateau
+    off = TRUTH.with_values({"lubricant.C_1": 1.2 * TRUTH["lubricant.C_1"]})
+    r_off, _ = low.residual(off)
+    assert float(r_off @ r_off) / r_off.size > 5 * chi2  # measured 3895
+
+
 def _assert_jacobian(term: Any, p: ParamSet, names: list[str], jm: np.ndarray) -> None:
     """Columns of ``jm`` against central differences of ``term.residual`` in log p (step
     1e-4); the analytic Jacobian interpolates dH on a grid: 2 % of the column norm."""
@@ -96,12 +120,14 @@ def _assert_jacobian(term: Any, p: ParamSet, names: list[str], jm: np.ndarray) -
         assert np.linalg.norm(jm[:, j] - fd) < 0.02 * np.linalg.norm(fd), names[j]
 
 
-def test_record_jacobian_matches_central_differences(record: Recording) -> None:
+@pytest.mark.parametrize("f_max_hz", [None, 1e6])
+def test_record_jacobian_matches_central_differences(record: Recording,
+                                                     f_max_hz: float | None) -> None:
     prep = prepare_recording(record)
     spec = NetSpec()
     names = ["lubricant.C_1", "lubricant.R_2", "bearing.R_h"]
     p = TRUTH.perturbed(np.random.default_rng(2), 0.2, names)
-    term = record_term(prep, spec, p, "rotating")
+    term = record_term(prep, spec, p, "rotating", f_max_hz=f_max_hz)
     _, jm = term.residual(p, names, jac=True)
     assert jm is not None
     _assert_jacobian(term, p, names, jm)

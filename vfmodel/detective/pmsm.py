@@ -503,8 +503,10 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
 
     def identified(effects: frozenset[str], secs: Sequence[int],
                    prog: Progress = no_progress) -> tuple[ParamSet, int]:
+        # the detective scores the recordings by their H1 transfers (_bearing_term): its
+        # start fits the standstill record the same way
         ident = identify(dataset, effects, sections=secs, n_rungs=n_rungs, prepared=prepared,
-                         progress=prog)
+                         progress=prog, standstill_fit="h1")
         st = _with_speed_copies(ident.params, prepared)
         vals: dict[str, float] = {}
         for sf in ident.speeds:

@@ -15,14 +15,27 @@ transfer, see :mod:`.objective`):
    chi-square keeps falling by more than ``min_gain``, and the best is kept. Optional
    multistart (``n_starts``).
 2. ``standstill 0 rpm`` - conditions 1 and 2 together: the same parameters (except
-   :data:`STANDSTILL_HIDDEN`, which the closed contact hides) from the spectra and the H1
-   transfer of the 0 rpm recording (metallic contact closed), which the paper identifies
-   together because both are taken at standstill. The bearing voltage is then near the
-   noise level (SNR ~1 dB) and the terminal spectrum near 10 MHz only a few dB above the
-   probe noise, so the H1 residual is whitened with the full covariance of the H1 estimate
-   and the model's H1 carries the bias that the input noise causes in the measured one
+   :data:`STANDSTILL_HIDDEN`, which the closed contact hides) from the spectra and the 0
+   rpm recording (metallic contact closed), which the paper identifies together because
+   both are taken at standstill. The bearing voltage is then near the noise level (SNR ~1
+   dB). By default (``standstill_fit="combined"``) the recording enters twice: as the H1
+   transfer over the whole band and as the output-error fit of its waveform low-passed at
+   :data:`STANDSTILL_RECORD_HZ` (:mod:`.record_fit`). The H1 alone leaves the band from the
+   switching frequency to a few 100 kHz nearly free (a handful of its lowest bins carry
+   it; independent bench 118: the model's amplitude spectrum 18-26 % low from 0 to 500
+   kHz, spectral correlation 0.941 against the 0.978 a perfect model reaches; combined:
+   0.961). The waveform alone lowers the ringing: near 10 MHz the terminal spectrum is
+   only a few dB above the probe noise, and an output-error fit with noisy inputs is
+   biased low there as an uncorrected H1 is (a small bench of the network itself: 0 rpm
+   peak 15 % low, against +4 % with H1). The H1 term corrects that bias: its residual is
+   whitened with the full covariance of the H1 estimate and the model's H1 carries the
+   bias that the input noise causes in the measured one
    (:func:`vfmodel.greybox.objective.bearing_term`, ``weighting="covariance"``,
-   ``input_noise=True``);
+   ``input_noise=True``). The two terms share the record's information below
+   :data:`STANDSTILL_RECORD_HZ`, where the H1 has few bins. Splitting the band instead
+   (waveform below 1 MHz, H1 only above) put bench 118's 0 rpm peak 0.132 V off (0.006 V
+   combined), the H1 bins between 0.2 and 1 MHz hold its main ringing. ``"h1"`` (the
+   method before 2026-11-24) and ``"record"`` (the whole waveform) remain for comparison;
 3. ``lubricant <rpm>`` - condition 2 at each rotating speed with every other parameter
    fixed: the lubricant film (``lubricant.*``), the Hertzian-contact resistance and the edge
    capacitance (contact switch open), from the previous speed's values and from the film
@@ -55,7 +68,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel._choices import BearingState
+from vfmodel._choices import BearingState, check_choice
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.job_pool import JobPool
@@ -110,6 +123,17 @@ Term = ImpedanceTerm | BearingTerm | RecordTerm
 RotatingFit = Literal["record", "h1"]
 """Condition 2 at the rotating speeds: output-error fit of the whole record
 (:mod:`vfmodel.greybox.record_fit`, default) or the H1 transfer (paper eq. 21)."""
+
+StandstillFit = Literal["combined", "record", "h1"]
+"""Condition 2 at standstill (module docstring, stage 2): the H1 transfer and the waveform
+low-passed at :data:`STANDSTILL_RECORD_HZ` (default), the whole waveform, or the H1
+transfer alone."""
+
+STANDSTILL_RECORD_HZ = 1e6
+"""Top of the standstill waveform term (``standstill_fit="combined"``): a decade above the
+band the H1 estimate leaves nearly free (the switching harmonics and the rotor-current
+path's level, 8 kHz to a few 100 kHz) and well below the top of the band (5-10 MHz), where
+the terminal voltages are near the probe noise and only the H1 term models the bias."""
 
 JOINT_TRIGGER = 10.0
 """Reduced chi-square of a rotating record's lubricant stage from which the joint refit
@@ -371,7 +395,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              input_noise: bool = True,
              hold_standstill: Sequence[str] = STANDSTILL_HIDDEN,
              rotating_fit: RotatingFit = "record", joint: bool = False,
-             max_nfev_joint: int = 25) -> Identification:
+             max_nfev_joint: int = 25,
+             standstill_fit: StandstillFit = "combined") -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -405,6 +430,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         Recordings already prepared by :func:`prepare_recording`, by speed.
     progress : callable
         ``progress(stage, done, total)``.
+    standstill_fit : "combined", "record" or "h1"
+        Condition 2 at standstill (module docstring, stage 2).
     standstill_weighting : "covariance" or "diagonal"
         Weighting of the H1 residual of the standstill record (:func:`bearing_term`):
         the full covariance of the three H1 components (default) or each component by
@@ -508,10 +535,19 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     progress("prepare recordings", len(recs), len(recs))
     fits: list[SpeedFit] = []
     stand = [s for s in sorted(prep) if bearing_state(s, eff) == "standstill"]
+    check_choice("standstill_fit", standstill_fit, StandstillFit)
+    terms0: list[tuple[Term, float]] = []  # condition 2 of the standstill stage
     if stand:
-        term0 = bearing_term(prep[stand[0]], spec, p, "standstill",
-                             weighting=standstill_weighting, input_noise=input_noise)
-        terms: list[tuple[Term, float]] = [(term0, weight_bearing)]
+        p0s = prep[stand[0]]
+        if standstill_fit != "record":
+            terms0.append((bearing_term(p0s, spec, p, "standstill",
+                                        weighting=standstill_weighting,
+                                        input_noise=input_noise), weight_bearing))
+        if standstill_fit != "h1":
+            terms0.append((record_term(p0s, spec, p, "standstill", f_max_hz=(
+                STANDSTILL_RECORD_HZ if standstill_fit == "combined" else None)),
+                weight_bearing))
+        terms: list[tuple[Term, float]] = list(terms0)
         if imp is not None:
             terms.insert(0, (imp_fit, 1.0))
         p, rep = fit_stage(terms, p, [n for n in names if n not in held],
@@ -549,8 +585,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         machine: list[tuple[str, Term, float]] = []
         if imp is not None:
             machine.append(("impedance", imp_fit, 1.0))
-        if stand:
-            machine.append(("standstill", fits[0].term, weight_bearing))
+        machine += [("standstill", t, w) for t, w in terms0]
         res = joint_stage(p, fits, stages, machine, lub, max_nfev=max_nfev_joint,
                           prior_sigma=prior_sigma, progress=progress)
         if res is not None:

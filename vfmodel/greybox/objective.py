@@ -40,6 +40,7 @@ from vfmodel.core.recording import Recording
 from vfmodel.errors import InputError
 from vfmodel.greybox._h1op import H1Operator, h1_operator
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
+from vfmodel.greybox.bearing import BEARING_C_REF_HZ
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
@@ -294,6 +295,16 @@ class RecordTransfer:
         the Jacobian at the point just evaluated reuses it)."""
         v = values_of(params, self.spec, self.state, sources=True)
         return self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz)
+
+    def cm_transfer(self, params: ParamSet, freq_hz: float = BEARING_C_REF_HZ) -> float:
+        """``|sum_i H_i(f)|``: the bearing voltage per volt of common-mode terminal voltage
+        at ``freq_hz`` (the three terminals driven alike), a direct solve at that one
+        frequency. At 100 kHz, between the switching harmonics and the ringing, this is
+        the network's capacitive bearing voltage ratio: the plateau level the rotating
+        records fix, whatever the scale of the divider's capacitances."""
+        v = values_of(params, self.spec, self.state, sources=True)
+        h = self.mna.solve(np.array([float(freq_hz)]), self.b, self.cout, v).h
+        return float(abs(np.sum(h[0, 0, :])))
 
     def use_low_rank(self, params: ParamSet, names: Sequence[str]) -> bool:
         """Prepare the transfer for fits that move only ``names`` from ``params`` (the

@@ -89,20 +89,32 @@ class RecordTerm(RecordTransfer):
     basis: ArrF           # (n_window, n_basis) orthonormal transient basis
     sigma: float          # noise std of one sample of y_meas
     taus: tuple[float, ...] = ()   # time constants of the transient basis (s)
+    n_bins: int | None = None      # low-passed: the record bins kept (else all)
+    stride: int = 1       # low-passed: every stride-th sample of the window compared
     _memo: TransferMemo = field(default_factory=TransferMemo, init=False, repr=False,
                                 compare=False)
 
     @property
     def n_residuals(self) -> int:
-        return int(self.window.stop - self.window.start)
+        return len(range(self.window.start, self.window.stop, self.stride))
 
     def _project(self, d: ArrF) -> ArrF:
-        """Remove the transient basis from (..., n_window) differences."""
-        return np.asarray(d - (d @ self.basis) @ self.basis.T, dtype=float)
+        """Remove the transient basis from (..., n_window) differences (low-passed: then
+        every ``stride``-th sample)."""
+        out = np.asarray(d - (d @ self.basis) @ self.basis.T, dtype=float)
+        return out[..., :: self.stride] if self.stride > 1 else out
+
+    def _band(self, h_bins: ArrC) -> ArrC:
+        """The transfer on the bins compared (zero above the low-pass band)."""
+        if self.n_bins is None:
+            return h_bins
+        out = h_bins.copy()
+        out[self.n_bins :] = 0.0
+        return out
 
     def raw_difference(self, params: ParamSet) -> ArrF:
         """``y_model - y_meas`` on the window after removing the transient (volts)."""
-        ym = steady_output(self.transfer_bins(params), self.prep, for_h1=True)
+        ym = steady_output(self._band(self.transfer_bins(params)), self.prep, for_h1=True)
         return self._project((ym - self.y_meas)[self.window])
 
     def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
@@ -114,10 +126,11 @@ class RecordTerm(RecordTransfer):
             return r, None
         if not names:
             return r, np.zeros((r.size, 0))
-        grid = jacobian_grid(self.prep.bins_hz, float(self.prep.bins_hz[-1]))
+        bins = self.prep.bins_hz
+        top = float(bins[-1] if self.n_bins is None else bins[self.n_bins - 1])
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, self.transfer_bins(params), lmap,
-                                self._memo.lowrank)[:, self.window]
+                                jacobian_grid(bins, top), self._band(self.transfer_bins(params)),
+                                lmap, self._memo.lowrank)[:, self.window]
         jm = self._project(dy) / self.sigma
         return r, np.ascontiguousarray(jm.T)
 
@@ -127,7 +140,7 @@ class RecordTerm(RecordTransfer):
     def transient(self, params: ParamSet) -> ArrF:
         """Estimated free response (full rate, whole record): the transient basis fitted
         to ``y_meas - y_model`` on the window, i.e. the initial-state correction."""
-        ym = steady_output(self.transfer_bins(params), self.prep, for_h1=True)
+        ym = steady_output(self._band(self.transfer_bins(params)), self.prep, for_h1=True)
         fs = self.prep.fs_h1
         tw = np.arange(self.window.start, self.window.stop) / fs
         coef, *_ = np.linalg.lstsq(self._columns(tw), (self.y_meas - ym)[self.window],
@@ -165,12 +178,14 @@ class RecordTerm(RecordTransfer):
         return max(1.0, 1.0 + 2.0 * tot)
 
 
-def _band_noise_sigma(prep: PreparedRecording, f_min_hz: float = 200e3) -> float:
+def _band_noise_sigma(prep: PreparedRecording, f_min_hz: float = 200e3,
+                      top_hz: float | None = None) -> float:
     """Std of the output noise of the filtered bearing voltage, assumed white in the band:
     the median of ``(1 - gamma^2) G_yy`` (one-sided PSD of the H1 analysis) above
-    ``f_min_hz`` times the band. Below ``f_min_hz`` the film's time constants (ms) exceed
-    the Welch segments, the segments leak and the coherence understates the fit there:
-    the median over the band above is robust to such bins and to the ringing peaks."""
+    ``f_min_hz`` times the band (to ``top_hz``, default the record's top bin). Below
+    ``f_min_hz`` the film's time constants (ms) exceed the Welch segments, the segments
+    leak and the coherence understates the fit there: the median over the band above is
+    robust to such bins and to the ringing peaks."""
     h1 = prep.h1
     f = h1.freq_hz
     coh = np.clip(np.nan_to_num(h1.coherence[:, 0]), 0.0, 1.0)
@@ -179,7 +194,7 @@ def _band_noise_sigma(prep: PreparedRecording, f_min_hz: float = 200e3) -> float
     band = (f >= min(f_min_hz, 0.1 * f_hi)) & (f <= f_hi) & h1.valid
     if band.sum() < 10:
         band = (f > 0) & (f <= f_hi)
-    var = float(np.median(psd[band])) * f_hi
+    var = float(np.median(psd[band])) * (f_hi if top_hz is None else min(top_hz, f_hi))
     tot = float(np.var(prep.bearing))
     return float(np.sqrt(max(var, 1e-8 * tot, 1e-30)))
 
@@ -187,15 +202,26 @@ def _band_noise_sigma(prep: PreparedRecording, f_min_hz: float = 200e3) -> float
 def record_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
                 state: BearingState, *, t_skip_s: float = 20e-6, t_end_s: float = 3e-6,
                 tau_min_s: float = 5e-6, tau_max_s: float = 10e-3,
-                n_tau: int = 10) -> RecordTerm:
+                n_tau: int = 10, f_max_hz: float | None = None) -> RecordTerm:
     """Output-error term of one prepared recording (see the module docstring).
 
     ``t_skip_s``/``t_end_s``: record start and end left out (fast transients, filter
     wrap-around); ``tau_min_s``..``tau_max_s``, ``n_tau``: the transient basis.
+    ``f_max_hz``: compare the waveforms low-passed there (model and record: the DFT bins
+    up to it), sampled at about twice that frequency, at which white noise so limited
+    stays uncorrelated from sample to sample.
     """
     fs = prep.fs_h1
     n = prep.n_h1
-    y = _resample(sfft.rfft(prep.bearing)[: prep.bins_hz.size], prep.n_samples, n)
+    spec_b = sfft.rfft(prep.bearing)[: prep.bins_hz.size]
+    n_bins: int | None = None
+    stride = 1
+    if f_max_hz is not None and f_max_hz < prep.bins_hz[-1]:
+        n_bins = max(2, int(np.searchsorted(prep.bins_hz, f_max_hz, side="right")))
+        spec_b = spec_b.copy()
+        spec_b[n_bins:] = 0.0
+        stride = max(1, int(fs / (2.0 * float(prep.bins_hz[n_bins - 1]))))
+    y = _resample(spec_b, prep.n_samples, n)
     k0 = min(int(np.ceil(t_skip_s * fs)), n // 4)
     k1 = max(n - int(np.ceil(t_end_s * fs)), k0 + n // 2)
     win = slice(k0, k1)
@@ -207,5 +233,6 @@ def record_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     mna = spec.build(params, state, sources=True).mna
     b = mna.input_matrix(list(SOURCES))
     cout = mna.output_matrix([BEARING_NODE])
+    top = None if n_bins is None else float(prep.bins_hz[n_bins - 1])
     return RecordTerm(prep, state, spec, mna, b, cout, y, win, basis,
-                      _band_noise_sigma(prep), taus)
+                      _band_noise_sigma(prep, top_hz=top), taus, n_bins, stride)

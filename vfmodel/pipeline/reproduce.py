@@ -48,7 +48,13 @@ from vfmodel.greybox.bearing import (
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
-from vfmodel.greybox.identify import STANDSTILL_HIDDEN, Identification, RotatingFit, identify
+from vfmodel.greybox.identify import (
+    STANDSTILL_HIDDEN,
+    Identification,
+    RotatingFit,
+    StandstillFit,
+    identify,
+)
 from vfmodel.greybox.joint import SHARED
 from vfmodel.greybox.lsq import log_interval
 from vfmodel.greybox.metrics import (
@@ -142,7 +148,8 @@ def _f(x: float) -> float | None:
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, progress: Progress = no_progress,
-              rotating_fit: RotatingFit = "record") -> ReproduceResult:
+              rotating_fit: RotatingFit = "record",
+              standstill_fit: StandstillFit = "combined") -> ReproduceResult:
     """Run the paper's pipeline on ``dataset`` (see the module docstring)."""
     if not dataset.impedance:
         raise InputError("reproduce needs impedance spectra", source=dataset.name,
@@ -151,7 +158,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
-                     progress=progress, rotating_fit=rotating_fit)
+                     progress=progress, rotating_fit=rotating_fit,
+                     standstill_fit=standstill_fit)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
     # ---- impedance (Table II)
@@ -232,6 +240,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                                       lambda q: divider_capacitances(q, eff)["c_b"]),
                 "c_b_100khz_f": log_interval(sf.params, rep,
                                              lambda q: bearing_capacitance(q, eff)),
+                # the plateau level the record fixes (identifiable without the scale)
+                "cm_transfer_100khz": log_interval(sf.params, rep, (sf.record or term).cm_transfer),
             }
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
             entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
