@@ -632,12 +632,24 @@ def drop_representative(
     new state, the representatives left and their removal costs; None when ``S_GG`` is
     singular (then factorise anew)."""
     _, j1 = _columns(reps)
-    cols = [int(j1[j])] if reps[j].imag == 0 else [int(j1[j]), int(j1[j]) + 1]
-    keep = np.setdiff1d(np.arange(x.shape[1]), cols)
-    s_gg = s_mat[:, cols][:, :, cols]
-    if not np.all(np.isfinite(s_gg)) or np.any(np.linalg.cond(s_gg) > 1e12):
+    c0 = int(j1[j])
+    cols = [c0] if reps[j].imag == 0 else [c0, c0 + 1]
+    keep = np.ones(x.shape[1], dtype=bool)
+    keep[cols] = False
+    s_gg = s_mat[:, cols][:, :, cols]  # (Mw, g, g), g = 1 or 2: inverted in closed form
+    a = s_gg[:, 0, 0]
+    if len(cols) == 1:
+        ok = np.isfinite(a) & (a > 0)
+        inv = (1.0 / np.where(ok, a, 1.0))[:, None, None]
+    else:
+        b, d = s_gg[:, 0, 1], s_gg[:, 1, 1]
+        det = a * d - b * b  # S is symmetric positive definite: det > 0
+        ok = np.isfinite(det) & (det > 1e-12 * np.abs(a * d))
+        det = np.where(ok, det, 1.0)
+        inv = np.stack([np.stack([d, -b], axis=-1), np.stack([-b, a], axis=-1)],
+                       axis=-2) / det[:, None, None]
+    if not np.all(ok):
         return None
-    inv = np.linalg.inv(s_gg)
     s_rg = s_mat[:, keep][:, :, cols]
     x_new = x[:, keep] - s_rg @ (inv @ x[:, cols])
     s_new = s_mat[:, keep][:, :, keep] - s_rg @ inv @ np.swapaxes(s_rg, 1, 2)
