@@ -37,7 +37,11 @@ def _gram_rows(gram: FloatArray) -> FloatArray:
     """Square-root rows ``R`` with ``R^T R = gram`` (symmetric PSD, diagonally scaled)."""
     dsc = 1.0 / np.sqrt(np.maximum(np.diag(gram), _TINY))
     scaled = dsc[:, None] * gram * dsc[None, :]
-    if not np.all(np.isfinite(scaled)):
+    # one reduction instead of an elementwise test: a NaN or infinite entry makes the
+    # sum non-finite (|entries| <= 1 for a PSD matrix with unit diagonal; a sum that
+    # overflows, from a Gram difference far from PSD, is refused the same way and the
+    # caller takes the exact rows)
+    if not np.isfinite(float(np.sum(scaled))):
         raise np.linalg.LinAlgError("non-finite Gram matrix")
     # numpy's eigh (LAPACK's dsyevd called directly rounds differently, and the automatic
     # order follows the rounding: mlin.s2p 22 -> 21 poles)

@@ -389,7 +389,7 @@ def _scaled_lstsq(
         mu = ridge * (float(np.linalg.norm(b)) if b_norm is None else b_norm) / np.sqrt(n_c)
         an = np.zeros((a.shape[0] + n_c, n_c), order="F")  # LAPACK's layout
         np.divide(a, norms, out=an[: a.shape[0]])
-        an[np.arange(a.shape[0], a.shape[0] + n_c), np.arange(n_c)] = mu
+        np.fill_diagonal(an[a.shape[0] :], mu)
         b_ext = np.zeros((a.shape[0] + n_c, *b.shape[1:]))
         b_ext[: a.shape[0]] = b
         b = b_ext
