@@ -20,7 +20,10 @@ uncertainties and the stages; ``model.divider_intervals`` and
 the rotor current's path inductances and the parameters the contact hides are known only
 through their physics priors (:mod:`vfmodel.greybox.path_prior`: the standstill data fix
 ``C_wr`` times the path impedance, not the scale; ``C_wr`` and the bearing capacitance are
-identifiable only through those priors); ``blackbox`` the band errors of grey and black box;
+identifiable only through those priors; ``lubricant_interval.cm_transfer_100khz`` is the
+bearing voltage per volt of common-mode terminal voltage at 100 kHz, the plateau level that
+the record fixes whatever that scale, with an interval that holds the noise, not the
+network's structural error); ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
 
