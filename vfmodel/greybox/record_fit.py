@@ -64,6 +64,7 @@ from vfmodel.greybox.objective import (
     jacobian_grid,
     output_derivatives,
     steady_output,
+    values_of,
 )
 from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.periodic import resample_periodic as _resample
@@ -104,17 +105,20 @@ class RecordTerm(RecordTransfer):
         out = np.asarray(d - (d @ self.basis) @ self.basis.T, dtype=float)
         return out[..., :: self.stride] if self.stride > 1 else out
 
-    def _band(self, h_bins: ArrC) -> ArrC:
-        """The transfer on the bins compared (zero above the low-pass band)."""
+    def transfer_bins(self, params: ParamSet) -> ArrC:
+        """Network transfer (n_bins, 1, 3) on the record's FFT bins; low-passed: solved
+        on the bins compared only, zero above."""
         if self.n_bins is None:
-            return h_bins
-        out = h_bins.copy()
-        out[self.n_bins :] = 0.0
+            return super().transfer_bins(params)
+        v = values_of(params, self.spec, self.state, sources=True)
+        h = self._memo(self.mna, self.b, self.cout, v, self.prep.bins_hz[: self.n_bins])
+        out = np.zeros((self.prep.bins_hz.size, *h.shape[1:]), dtype=complex)
+        out[: self.n_bins] = h
         return out
 
     def raw_difference(self, params: ParamSet) -> ArrF:
         """``y_model - y_meas`` on the window after removing the transient (volts)."""
-        ym = steady_output(self._band(self.transfer_bins(params)), self.prep, for_h1=True)
+        ym = steady_output(self.transfer_bins(params), self.prep, for_h1=True)
         return self._project((ym - self.y_meas)[self.window])
 
     def residual(self, params: ParamSet, names: Sequence[str] = (), jac: bool = False,
@@ -129,7 +133,7 @@ class RecordTerm(RecordTransfer):
         bins = self.prep.bins_hz
         top = float(bins[-1] if self.n_bins is None else bins[self.n_bins - 1])
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                jacobian_grid(bins, top), self._band(self.transfer_bins(params)),
+                                jacobian_grid(bins, top), self.transfer_bins(params),
                                 lmap, self._memo.lowrank)[:, self.window]
         jm = self._project(dy) / self.sigma
         return r, np.ascontiguousarray(jm.T)
@@ -140,7 +144,7 @@ class RecordTerm(RecordTransfer):
     def transient(self, params: ParamSet) -> ArrF:
         """Estimated free response (full rate, whole record): the transient basis fitted
         to ``y_meas - y_model`` on the window, i.e. the initial-state correction."""
-        ym = steady_output(self._band(self.transfer_bins(params)), self.prep, for_h1=True)
+        ym = steady_output(self.transfer_bins(params), self.prep, for_h1=True)
         fs = self.prep.fs_h1
         tw = np.arange(self.window.start, self.window.stop) / fs
         coef, *_ = np.linalg.lstsq(self._columns(tw), (self.y_meas - ym)[self.window],
