@@ -35,7 +35,7 @@ from vfmodel.fitting._vf_core import (
 
 def _gram_rows(gram: FloatArray) -> FloatArray:
     """Square-root rows ``R`` with ``R^T R = gram`` (symmetric PSD, diagonally scaled)."""
-    dsc = 1.0 / np.sqrt(np.maximum(np.diag(gram), _TINY))
+    dsc = 1.0 / np.sqrt(np.maximum(gram.diagonal(), _TINY))
     scaled = dsc[:, None] * gram * dsc[None, :]
     # one reduction instead of an elementwise test: a NaN or infinite entry makes the
     # sum non-finite (|entries| <= 1 for a PSD matrix with unit diagonal; a sum that
@@ -166,7 +166,7 @@ def relocate_poles(
     # relaxation row, scaled like the data (Gustavsen 2006, eq. (9)-(10))
     scale = prob.wh_norm / k_f
     relax = scale * np.sum(basis_s.real, axis=0)
-    a = np.vstack([rows, relax[None, :]])
+    a = np.concatenate((rows, relax[None, :]))
     b = np.zeros(a.shape[0])
     b[-1] = scale * k_f
     x = _scaled_lstsq(a, b)

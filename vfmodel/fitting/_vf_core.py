@@ -244,13 +244,11 @@ def bound_real_poles(
     if bounds is None:
         return reps
     real = reps.imag == 0
-    if not np.any(real):
+    mag = np.abs(reps.real[real])
+    if mag.size == 0 or (mag.min() >= bounds[0] and mag.max() <= bounds[1]):
         return reps
     out = reps.copy()
-    mag = np.abs(out[real].real)
     low, high = mag < bounds[0], mag > bounds[1]
-    if not (np.any(low) or np.any(high)):
-        return reps
     # clipped poles are spread geometrically (coincident poles make the basis singular)
     mag[low] = bounds[0] / 1.5 ** np.arange(int(np.sum(low)))
     mag[high] = bounds[1] * 1.5 ** np.arange(int(np.sum(high)))
@@ -607,17 +605,20 @@ def _costs_of(x: FloatArray, s_mat: FloatArray, reps: ComplexArray) -> FloatArra
     nr, j1 = _columns(reps)
     cost = np.zeros(reps.size)
     with np.errstate(all="ignore"):
-        real_j = j1[:nr]
-        cost[:nr] = np.sum(x[:, real_j, :] ** 2 / s_mat[:, real_j, real_j][:, :, None], axis=(0, 2))
-        c1 = j1[nr:]
-        c2 = c1 + 1
-        s11 = s_mat[:, c1, c1][:, :, None]
-        s22 = s_mat[:, c2, c2][:, :, None]
-        s12 = s_mat[:, c1, c2][:, :, None]
-        x1, x2 = x[:, c1, :], x[:, c2, :]
-        det = s11 * s22 - s12**2
-        quad = (s22 * x1**2 - 2 * s12 * x1 * x2 + s11 * x2**2) / det
-        cost[nr:] = np.sum(quad, axis=(0, 2))
+        if nr:
+            real_j = j1[:nr]
+            cost[:nr] = np.sum(x[:, real_j, :] ** 2 / s_mat[:, real_j, real_j][:, :, None],
+                               axis=(0, 2))
+        if nr < reps.size:
+            c1 = j1[nr:]
+            c2 = c1 + 1
+            s11 = s_mat[:, c1, c1][:, :, None]
+            s22 = s_mat[:, c2, c2][:, :, None]
+            s12 = s_mat[:, c1, c2][:, :, None]
+            x1, x2 = x[:, c1, :], x[:, c2, :]
+            det = s11 * s22 - s12**2
+            quad = (s22 * x1**2 - 2 * s12 * x1 * x2 + s11 * x2**2) / det
+            cost[nr:] = np.sum(quad, axis=(0, 2))
     out: FloatArray = np.where(np.isfinite(cost), np.maximum(cost, 0.0), 0.0)
     return out
 
@@ -653,7 +654,7 @@ def drop_representative(
     s_rg = s_mat[:, keep][:, :, cols]
     x_new = x[:, keep] - s_rg @ (inv @ x[:, cols])
     s_new = s_mat[:, keep][:, :, keep] - s_rg @ inv @ np.swapaxes(s_rg, 1, 2)
-    rest = np.delete(reps, j)
+    rest = np.concatenate((reps[:j], reps[j + 1 :]))
     return x_new, s_new, rest, _costs_of(x_new, s_new, rest)
 
 
