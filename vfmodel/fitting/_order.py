@@ -190,7 +190,10 @@ def _backward_prune(
             cost = core.removal_costs(prob, reps, (x, s_mat))
         else:
             x, s_mat, reps, cost = nxt
-    return core.solve_residues(prob, reps) if removed else coef
+    if not removed:
+        return coef
+    core.remember_costs(prob, reps, cost)  # the one-pole-less trial ranks these poles next
+    return core.solve_residues(prob, reps)
 
 
 def _reseed(reps: NDArray[np.complex128], w_lo: float) -> NDArray[np.complex128]:

@@ -553,15 +553,19 @@ def removal_costs(prob: Problem, reps: ComplexArray,
     systems give 0 for the affected poles (they are redundant). ``state``: the
     :func:`removal_state` of ``reps`` if already computed.
     """
-    key = reps.tobytes()
-    hit = prob._costs.get(key)
+    hit = prob._costs.get(reps.tobytes())
     if hit is not None:
         return hit
-    out = _costs_of(*(removal_state(prob, reps) if state is None else state), reps)
-    out.setflags(write=False)  # shared through the cache
+    return remember_costs(
+        prob, reps, _costs_of(*(removal_state(prob, reps) if state is None else state), reps))
+
+
+def remember_costs(prob: Problem, reps: ComplexArray, cost: FloatArray) -> FloatArray:
+    """Keep ``cost`` as the :func:`removal_costs` of ``reps`` (the last pole set only)."""
+    cost.setflags(write=False)  # shared through the cache
     prob._costs.clear()
-    prob._costs[key] = out
-    return out
+    prob._costs[reps.tobytes()] = cost
+    return cost
 
 
 def removal_state(prob: Problem, reps: ComplexArray) -> tuple[FloatArray, FloatArray]:
