@@ -163,7 +163,9 @@ def _anchors(
     lo, hi = h[int(np.argmax(fd.omega > 0))], h[-1]
     h_v = np.array([lo.real if x == 0 else lo for x in below] + [hi] * len(above))
     rel = _ANCHOR_WEIGHT if rel_weight is None else float(rel_weight)
-    weight = rel * float(np.median(w[w > 0]))
+    wp = w[w > 0]
+    # equal weights (the default of S data): their median without the sort
+    weight = rel * float(wp[0] if wp.min() == wp.max() else np.median(wp))
     return np.asarray(s_v, dtype=complex), np.asarray(h_v, dtype=complex), weight
 
 
