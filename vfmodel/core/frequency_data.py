@@ -203,7 +203,8 @@ class FrequencyData:
         """Read a :class:`skrf.Network` as Z, Y or S data (S at the network's real z0)."""
         z0s = np.asarray(network.z0)
         z0 = complex(z0s.flat[0]) if z0s.size else 50.0
-        if z0s.size and (not np.allclose(z0s, z0) or abs(z0.imag) > 0):
+        if z0s.size and (abs(z0.imag) > 0
+                         or not (np.all(z0s == z0) or np.allclose(z0s, z0))):
             raise InputError(
                 "only a real reference impedance common to all ports is supported",
                 source=source or network.name,
