@@ -403,3 +403,21 @@ def test_lighter_fit_not_taken_when_it_leaves_the_data_size() -> None:
                    float(np.linalg.svd(m.dd, compute_uv=False)[0]))
 
     assert gain(model) <= max(gain(anchored), 1.0) + 1e-3
+
+
+def test_values_whose_squares_overflow_are_refused(tmp_path: Path) -> None:
+    # a Touchstone file of 1e300 values ended in an internal error (LinAlgError in the
+    # relocation's Gram matrix); 1e90 still fits
+    f = np.geomspace(1e9, 4e9, 5)
+    huge = FrequencyData(f, np.array([1e300, -1e300 + 1e300j, 1e300, 5e299, 3e299])
+                         .reshape(-1, 1, 1), kind="S")
+    with pytest.raises(InputError, match="too large"):
+        vector_fit(huge)
+    path = tmp_path / "huge.s1p"
+    path.write_text("# GHz S RI R 50\n1 1e300 0\n2 -1e300 1e300\n3 1e300 0\n4 0.5e300 0\n")
+    assert cli_main(["fit", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out" / "model.json").exists()
+    big = FrequencyData(f, 1e90 * np.array([1.0, -1 + 1j, 1.0, 0.5, 0.3 + 0.1j])
+                        .reshape(-1, 1, 1), kind="Z")
+    model, _ = vector_fit(big)
+    assert np.all(np.isfinite(model(f)))

@@ -101,6 +101,19 @@ def _exclude(w: NDArray[np.float64], exclude: Any, n_freq: int) -> NDArray[np.fl
     return w
 
 
+def check_magnitude(fd: FrequencyData) -> None:
+    """InputError when the data's magnitude is too large for the fit (see _MAX_VALUE)."""
+    scale = float(np.max(np.abs(fd.values))) if fd.values.size else 0.0
+    if scale > _MAX_VALUE:
+        raise InputError(
+            "values too large to fit: their squares overflow the fit's least-squares "
+            "systems",
+            source=fd.source or _SRC,
+            found=f"largest magnitude {scale:.3g}",
+            expected=f"magnitudes below {_MAX_VALUE:g} (rescale the data)",
+        )
+
+
 def _check_data(fd: FrequencyData) -> bool:
     """Reject data no rational fit can represent; True for frequency-independent data
     (fitted by D alone, without poles)."""
@@ -118,6 +131,7 @@ def _check_data(fd: FrequencyData) -> bool:
     scale = float(np.max(np.abs(h)))
     if scale == 0.0:  # zero everywhere (Z of a short, Y of an open): D = 0
         return True
+    check_magnitude(fd)
     spread = float(np.max(np.abs(h - h.mean(axis=0, keepdims=True))))
     if spread > _CONSTANT * scale:
         return False
@@ -132,6 +146,10 @@ def _check_data(fd: FrequencyData) -> bool:
 
 
 _CONSTANT = 1e-9  # relative spread over frequency below which the data is a constant
+# largest data magnitude: the relocation forms Gram matrices of the weighted data times
+# the basis (squares of both), which overflow from about 1e154 (a file of 1e300 values
+# ended in an internal error)
+_MAX_VALUE = 1e100
 
 
 _POLE_SPAN = (10.0, 100.0)  # S models: real poles within [f_lo / 10, 100 f_hi]

@@ -30,7 +30,14 @@ from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
-from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
+from vfmodel.fitting.vectfit import (
+    FitReport,
+    check_magnitude,
+    data_noise,
+    fit_errors,
+    point_errors,
+    vector_fit,
+)
 
 
 @dataclass(frozen=True)
@@ -110,6 +117,7 @@ def run_fit(
     smaller, at least 1e-10 (:func:`enforce_margin_for`).
     """
     data = combine_spectra(spectra, kind)
+    check_magnitude(data)  # before the artifact search and the data's passivity floor
     art: DataArtifacts | None = None
     spikes: tuple[int, ...] = ()
     if clean:
