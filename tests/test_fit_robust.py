@@ -417,6 +417,8 @@ def test_values_whose_squares_overflow_are_refused(tmp_path: Path) -> None:
     path.write_text("# GHz S RI R 50\n1 1e300 0\n2 -1e300 1e300\n3 1e300 0\n4 0.5e300 0\n")
     assert cli_main(["fit", str(path), "--out", str(tmp_path / "out")]) == 2
     assert not (tmp_path / "out" / "model.json").exists()
+    # info printed "||H(f)|| 0.5 - inf" and a floor of nan
+    assert cli_main(["info", str(path), "--json"]) == 2
     big = FrequencyData(f, 1e90 * np.array([1.0, -1 + 1j, 1.0, 0.5, 0.3 + 0.1j])
                         .reshape(-1, 1, 1), kind="Z")
     model, _ = vector_fit(big)

@@ -350,7 +350,9 @@ def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
     """What ``vfmodel info FILE`` says about one spectrum: kind, ports, reference
     impedance, points, frequency range and spacing, size range of ||H(f)||_F, the noise
     estimate (relative, as the automatic order sees it), export artifacts and, for square
-    Z/Y/S data, the passivity violation floor (active or not)."""
+    Z/Y/S data, the passivity violation floor (active or not). Data too large to fit
+    (:func:`check_magnitude`) are refused: their norms overflow."""
+    check_magnitude(data)
     f = data.freq_hz
     pos = f[f > 0]
     norm = np.linalg.norm(data.values.reshape(data.n_freq, -1), axis=1)
