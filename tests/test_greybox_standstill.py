@@ -169,7 +169,7 @@ def test_standstill_peak_on_small_bench(small_bench: tuple[Path, dict[str, objec
     # issue 7 target: absolute peak error at 0 rpm <= 0.08 V (measured 0.022 V)
     assert abs_err <= 0.08
     # against the bench's noise-free peak (not used by the pipeline): within 8 %
-    # (measured +3.7 %; the H1 alone, before 2026-11-24: +3.8 %)
+    # (measured +3.7 %; the H1 alone, the method before 2026-11-24: +3.6 %)
     assert abs(pk_model / clean - 1) < 0.08
     # the waveform over the whole band, with the terminals near the probe noise at the
     # top of the band, is biased low like an uncorrected H1 (measured -14.6 %): the
