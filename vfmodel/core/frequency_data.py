@@ -16,6 +16,12 @@ if TYPE_CHECKING:  # pragma: no cover
     import skrf
 
 
+MAX_VALUE = 1e100
+"""Largest magnitude of a response value: the fits form Gram matrices of the (weighted)
+data times their basis, whose squares overflow from about 1e154 (a Touchstone file of 1e300
+values ended in an internal error in ``fit`` and printed norms of inf in ``info``)."""
+
+
 @dataclass(frozen=True)
 class FrequencyData:
     """Frequency response samples ``values[k, i, j]`` at ``freq_hz[k]``.
@@ -84,6 +90,17 @@ class FrequencyData:
                 source=src,
                 place=f"frequency point {i} ({f[i]:g} Hz)",
                 expected="finite numbers",
+            )
+        big = np.abs(v) > MAX_VALUE
+        if np.any(big):
+            i = int(np.argmax(np.any(big, axis=(1, 2))))
+            raise InputError(
+                "response value too large: its square overflows the fits' least-squares "
+                "systems and the norms of the data",
+                source=src,
+                place=f"frequency point {i} ({f[i]:g} Hz)",
+                found=f"magnitude {float(np.max(np.abs(v[i]))):.3g}",
+                expected=f"magnitudes below {MAX_VALUE:g} (rescale the data)",
             )
         if np.any(f < 0):
             i = int(np.argmax(f < 0))
@@ -203,8 +220,7 @@ class FrequencyData:
         """Read a :class:`skrf.Network` as Z, Y or S data (S at the network's real z0)."""
         z0s = np.asarray(network.z0)
         z0 = complex(z0s.flat[0]) if z0s.size else 50.0
-        if z0s.size and (abs(z0.imag) > 0
-                         or not (np.all(z0s == z0) or np.allclose(z0s, z0))):
+        if z0s.size and (not np.allclose(z0s, z0) or abs(z0.imag) > 0):
             raise InputError(
                 "only a real reference impedance common to all ports is supported",
                 source=source or network.name,

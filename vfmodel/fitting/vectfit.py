@@ -37,14 +37,12 @@ from vfmodel.fitting._fit_setup import (
     _phase_turns,
     _pole_bounds,
     _weights,
-    check_magnitude,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
     import skrf
 
-__all__ = ["FitReport", "FitStep", "check_magnitude", "data_noise", "fit_errors",
-           "point_errors", "vector_fit"]
+__all__ = ["FitReport", "FitStep", "data_noise", "fit_errors", "point_errors", "vector_fit"]
 
 _SRC = "vector_fit"
 _DELAY_ORDER = 0.9  # delay="auto": the delay is kept only when it cuts the order to this

@@ -30,14 +30,7 @@ from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
-from vfmodel.fitting.vectfit import (
-    FitReport,
-    check_magnitude,
-    data_noise,
-    fit_errors,
-    point_errors,
-    vector_fit,
-)
+from vfmodel.fitting.vectfit import FitReport, data_noise, fit_errors, point_errors, vector_fit
 
 
 @dataclass(frozen=True)
@@ -117,7 +110,6 @@ def run_fit(
     smaller, at least 1e-10 (:func:`enforce_margin_for`).
     """
     data = combine_spectra(spectra, kind)
-    check_magnitude(data)  # before the artifact search and the data's passivity floor
     art: DataArtifacts | None = None
     spikes: tuple[int, ...] = ()
     if clean:
@@ -350,9 +342,7 @@ def spectrum_summary(data: FrequencyData) -> dict[str, Any]:
     """What ``vfmodel info FILE`` says about one spectrum: kind, ports, reference
     impedance, points, frequency range and spacing, size range of ||H(f)||_F, the noise
     estimate (relative, as the automatic order sees it), export artifacts and, for square
-    Z/Y/S data, the passivity violation floor (active or not). Data too large to fit
-    (:func:`check_magnitude`) are refused: their norms overflow."""
-    check_magnitude(data)
+    Z/Y/S data, the passivity violation floor (active or not)."""
     f = data.freq_hz
     pos = f[f > 0]
     norm = np.linalg.norm(data.values.reshape(data.n_freq, -1), axis=1)
