@@ -168,16 +168,17 @@ def _residual_noise(prob: core.Problem, coef: core.Coefficients) -> float:
 
 def _backward_prune(
     prob: core.Problem, coef: core.Coefficients, limit: float
-) -> core.Coefficients:
+) -> tuple[core.Coefficients, NDArray[np.float64]]:
     """Backward elimination with the poles fixed: remove the representative whose
     removal costs least per pole (exact re-solved error, :func:`_vf_core.removal_costs`)
-    while the weighted relative error stays within ``limit``."""
+    while the weighted relative error stays within ``limit``. Returns the coefficients
+    and the removal costs of their representatives (what :func:`_one_pole_less` ranks)."""
     den2 = float(np.linalg.norm(prob.wh)) ** 2
     reps = coef.reps
     sse = core.weighted_rel_rms(prob, core.evaluate(prob, coef)) ** 2 * den2
     removed = False
     x, s_mat = core.removal_state(prob, reps)
-    cost = core.removal_costs(prob, reps, (x, s_mat))
+    cost = core.costs_of_state(x, s_mat, reps)
     while reps.size > 1:
         # the order counts both poles of a pair: rank by the cost per pole removed
         j = int(np.argmin(cost / np.where(reps.imag == 0, 1.0, 2.0)))
@@ -190,13 +191,10 @@ def _backward_prune(
         if nxt is None:
             reps = np.delete(reps, j)
             x, s_mat = core.removal_state(prob, reps)
-            cost = core.removal_costs(prob, reps, (x, s_mat))
+            cost = core.costs_of_state(x, s_mat, reps)
         else:
             x, s_mat, reps, cost = nxt
-    if not removed:
-        return coef
-    core.remember_costs(prob, reps, cost)  # the one-pole-less trial ranks these poles next
-    return core.solve_residues(prob, reps)
+    return (core.solve_residues(prob, reps) if removed else coef), cost
 
 
 def _reseed(reps: NDArray[np.complex128], w_lo: float) -> NDArray[np.complex128]:
@@ -208,12 +206,12 @@ def _reseed(reps: NDArray[np.complex128], w_lo: float) -> NDArray[np.complex128]
 
 
 def _one_pole_less(
-    prob: core.Problem, reps: NDArray[np.complex128], w_lo: float
+    reps: NDArray[np.complex128], cost: NDArray[np.float64], w_lo: float
 ) -> NDArray[np.complex128]:
-    """Poles of one order less: the representative cheapest to remove per pole is
-    dropped; a dropped pair is replaced by one real pole at the lower band edge."""
-    cost = core.removal_costs(prob, reps) / np.where(reps.imag == 0, 1.0, 2.0)
-    j = int(np.argmin(cost))
+    """Poles of one order less: the representative cheapest to remove per pole (``cost``:
+    the removal costs of ``reps``, from :func:`_backward_prune`) is dropped; a dropped pair
+    is replaced by one real pole at the lower band edge."""
+    j = int(np.argmin(cost / np.where(reps.imag == 0, 1.0, 2.0)))
     rest = np.delete(reps, j)
     if reps[j].imag != 0:
         rest = np.concatenate([rest, [complex(-w_lo)]])
@@ -350,14 +348,14 @@ def auto_order(
             pick = (core.n_poles(conv.coef.reps), conv.weighted_rel_rms, conv.coef)
             best_err = conv.weighted_rel_rms
             limit = margin * best_err
-    coef = _backward_prune(prob, pick[2], limit)
+    coef, cost = _backward_prune(prob, pick[2], limit)
     converged = False
     for _ in range(_REDUCE_TRIALS):  # one pole less, re-seeded and relocated
         if coef.reps.size <= 1:
             break
         trial = _relocate.iterate(
             prob,
-            _reseed(_one_pole_less(prob, coef.reps, w_lo), w_lo),
+            _reseed(_one_pole_less(coef.reps, cost, w_lo), w_lo),
             max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
             tol=_TRIAL_TOL,
             stable=stable,
@@ -369,7 +367,7 @@ def auto_order(
         history.extend(trial.history)
         if trial.weighted_rel_rms > limit:
             break
-        coef, converged = _backward_prune(prob, trial.coef, limit), trial.converged
+        (coef, cost), converged = _backward_prune(prob, trial.coef, limit), trial.converged
     if not converged:  # no lower order was accepted: relocate the pruned model
         now = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         final = _relocate.iterate(

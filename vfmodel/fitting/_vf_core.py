@@ -133,12 +133,6 @@ class Problem:
         return {}
 
     @cached_property
-    def _costs(self) -> dict[bytes, FloatArray]:
-        """Cache of :func:`removal_costs` (the last pole set: the backward elimination and
-        the one-pole-less trial that follows it rank the same poles)."""
-        return {}
-
-    @cached_property
     def _s_all(self) -> ComplexArray:
         """The sample frequencies, then those of the anchors (common weights only)."""
         if self.w.shape[1] == 1 and self.anchors is not None:
@@ -541,8 +535,7 @@ def solve_residues(
     return Coefficients(reps=reps, c=x[:n].T.copy(), d=d, e=e)
 
 
-def removal_costs(prob: Problem, reps: ComplexArray,
-                  state: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+def removal_costs(prob: Problem, reps: ComplexArray) -> FloatArray:
     """Increase of the weighted squared error ||W (H_model - H)||_F^2 when one
     representative (with its conjugate) is removed and the residues are re-solved, (n_rep,).
 
@@ -550,22 +543,9 @@ def removal_costs(prob: Problem, reps: ComplexArray,
     the squared residual by ``x_G^T (S_GG)^-1 x_G`` with ``S = (A^T A)^-1`` (the
     partial-F statistic of backward elimination), summed over the responses. ``S`` comes
     from the triangular factor of the column-scaled QR. Numerically rank-deficient
-    systems give 0 for the affected poles (they are redundant). ``state``: the
-    :func:`removal_state` of ``reps`` if already computed.
+    systems give 0 for the affected poles (they are redundant).
     """
-    hit = prob._costs.get(reps.tobytes())
-    if hit is not None:
-        return hit
-    return remember_costs(
-        prob, reps, _costs_of(*(removal_state(prob, reps) if state is None else state), reps))
-
-
-def remember_costs(prob: Problem, reps: ComplexArray, cost: FloatArray) -> FloatArray:
-    """Keep ``cost`` as the :func:`removal_costs` of ``reps`` (the last pole set only)."""
-    cost.setflags(write=False)  # shared through the cache
-    prob._costs.clear()
-    prob._costs[reps.tobytes()] = cost
-    return cost
+    return costs_of_state(*removal_state(prob, reps), reps)
 
 
 def removal_state(prob: Problem, reps: ComplexArray) -> tuple[FloatArray, FloatArray]:
@@ -604,8 +584,8 @@ def _columns(reps: ComplexArray) -> tuple[int, NDArray[np.intp]]:
     return nr, np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
 
 
-def _costs_of(x: FloatArray, s_mat: FloatArray, reps: ComplexArray) -> FloatArray:
-    """:func:`removal_costs` from :func:`removal_state`."""
+def costs_of_state(x: FloatArray, s_mat: FloatArray, reps: ComplexArray) -> FloatArray:
+    """:func:`removal_costs` from the :func:`removal_state` of ``reps``."""
     nr, j1 = _columns(reps)
     cost = np.zeros(reps.size)
     with np.errstate(all="ignore"):
@@ -659,7 +639,7 @@ def drop_representative(
     x_new = x[:, keep] - s_rg @ (inv @ x[:, cols])
     s_new = s_mat[:, keep][:, :, keep] - s_rg @ inv @ np.swapaxes(s_rg, 1, 2)
     rest = np.concatenate((reps[:j], reps[j + 1 :]))
-    return x_new, s_new, rest, _costs_of(x_new, s_new, rest)
+    return x_new, s_new, rest, costs_of_state(x_new, s_new, rest)
 
 
 def pole_contributions(prob: Problem, coef: Coefficients) -> FloatArray:

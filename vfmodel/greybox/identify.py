@@ -547,9 +547,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             terms0.append((record_term(p0s, spec, p, "standstill", f_max_hz=(
                 STANDSTILL_RECORD_HZ if standstill_fit == "combined" else None)),
                 weight_bearing))
-        terms: list[tuple[Term, float]] = list(terms0)
-        if imp is not None:
-            terms.insert(0, (imp_fit, 1.0))
+        terms: list[tuple[Term, float]] = ([(imp_fit, 1.0)] if imp is not None else []) \
+            + terms0
         p, rep = fit_stage(terms, p, [n for n in names if n not in held],
                            f"standstill {stand[0]:g} rpm",
                            max_nfev=min(max_nfev, max_nfev_standstill),
