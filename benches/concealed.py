@@ -223,6 +223,10 @@ def _bearing_cases() -> tuple[ConcealedCase, ...]:
     out = []
     for name, eff, decoys in (("pmsm_two_layer", "lubricant_two_layer", ("ball_skin_effect",)),
                               ("pmsm_contact", "metallic_contact", ("shaft_skin_effect",)),
+                              ("pmsm_lub_loss", "lubricant_dielectric_loss",
+                               ("hertzian_edge_capacitance",)),
+                              ("pmsm_edge", "hertzian_edge_capacitance",
+                               ("lubricant_dielectric_loss",)),
                               ("pmsm_null_bearing", None, ("lubricant_two_layer",))):
         for extra in (False, True):
             note = (_BEARING if eff else "null, " + _BEARING.split(", ", 1)[1]) + \

@@ -237,6 +237,43 @@ def test_impedance_stage_recovers_known_parameters() -> None:
         assert err < 4 * rep.rel_std[n], (n, err, rep.rel_std[n])
 
 
+def test_impedance_stage_with_physical_priors_is_maximum_a_posteriori() -> None:
+    # the set-up above; priors: C_rf (shorted, unseen by the spectra) log-normal around
+    # 1.0 nF, gsd 2; L_w of phase U around the truth's value x 1.5, gsd 1.2 (a prior the
+    # data outweigh). Reference: the posterior of an unseen direction is its prior (mode
+    # at the median, std ln 2 times the stage's chi2_red scaling); a seen one moves from
+    # the least-squares value towards the prior by its share of the information
+    from vfmodel.greybox.priors import Prior
+
+    def lognormal(name: str, median: float, gsd: float) -> Prior:
+        return Prior(name, "lognormal", median, gsd, median / gsd**3, median * gsd**3,
+                     "physics", "test")
+
+    rng = np.random.default_rng(7)
+    spec = NetSpec()
+    names = ["winding.U.L_w", "winding.U.C_wf", "insulation.C_wr", "airgap.C_rf",
+             "frame.L_ext"]
+    truth = P0.with_values({"winding.U.C_wf": 1.1e-9, "airgap.C_rf": 1.6e-9})
+    f = np.logspace(3, 7, 81)
+    term = impedance_term(_spectra(truth, spec, f, 0.005, rng), spec, P0)
+    term = replace(term, sigma=np.full(6, 0.005 / np.sqrt(2)))
+    start = truth.perturbed(np.random.default_rng(1), 0.2, names)
+    pri = {"airgap.C_rf": lognormal("airgap.C_rf", 1.0e-9, 2.0),
+           "winding.U.L_w": lognormal("winding.U.L_w", 1.5 * truth["winding.U.L_w"], 1.2)}
+    ls, rep0 = fit_stage([(term, 1.0)], start, names, max_nfev=30, prior_sigma=1.0)
+    fit, rep = fit_stage([(term, 1.0)], start, names, max_nfev=30, prior_sigma=1.0,
+                         priors=pri)
+    assert fit["airgap.C_rf"] == pytest.approx(1.0e-9, rel=1e-3)
+    assert rep.rel_std["airgap.C_rf"] == pytest.approx(np.log(2.0) * np.sqrt(rep.chi2_red),
+                                                       rel=1e-3)
+    # L_w: between the least-squares value and the prior, much closer to the data
+    x_ls, x_map = np.log(ls["winding.U.L_w"]), np.log(fit["winding.U.L_w"])
+    x_pr = np.log(1.5 * truth["winding.U.L_w"])
+    assert 0 < (x_map - x_ls) / (x_pr - x_ls) < 0.05
+    assert rep.rel_std["winding.U.L_w"] < rep0.rel_std["winding.U.L_w"] * np.sqrt(
+        rep.chi2_red / rep0.chi2_red) * (1 + 1e-9)
+
+
 def test_lubricant_stage_recovers_film_from_periodic_record() -> None:
     # a record of the model's own periodic steady state (multisine terminals, 10 us
     # period << film time constant), output noise 1 %; fit C_1, C_2, R_h from 30 % off

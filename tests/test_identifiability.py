@@ -79,6 +79,9 @@ def test_effect_classes_from_its_trial() -> None:
     sw = Candidate("metallic_contact", "bearing.contact")
     assert effect_identifiability(sw, fit, _J, -30.0).status == "identifiable"
     assert effect_identifiability(sw, fit, _J, -0.5).status == "not-identifiable"
+    # a switch is no fitted parameter: seen from SWITCH_SEEN_CHI2 = 10, not from 1
+    assert effect_identifiability(sw, fit, _J, -5.0).status == "not-identifiable"
+    assert effect_identifiability(sw, fit, _J, -10.5).status == "identifiable"
 
 
 def test_prior_sigma_of_per_speed_copies() -> None:

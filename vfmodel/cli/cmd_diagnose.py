@@ -34,11 +34,13 @@ def _effects(value: str) -> tuple[str, ...]:
 @click.option("--max-nfev", default=None, type=click.IntRange(5, 1000),
               help="Function evaluations per refit (default: 60 for --model, 30 for the "
               "PMSM model).")
+@click.option("--priors", is_flag=True, help="Maximum a posteriori refits with the "
+              "physical priors of the grey-box parameters (dataset.toml [machine], "
+              "[bearing], [priors]; PMSM model).")
 @out_option
 @quiet_option
 def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | None,
-             out_dir: Path,
-             quiet: bool) -> None:
+             priors: bool, out_dir: Path, quiet: bool) -> None:
     """Fit the starting network to DATASET, locate where it disagrees with the data beyond
     the noise, try every effect it lacks, keep what the data support. Writes
     DIR/diagnosis.json, figures (PNG) and DIR/report.html."""
@@ -53,7 +55,8 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | No
     with staged_output(out_dir, owned=DIAGNOSE_OUTPUTS) as stage:
         prog = progress_bar(quiet)
         opts = {} if max_nfev is None else {"max_nfev": max_nfev}
-        res = run_diagnose(dataset, without=eff, model=model, progress=prog, **opts)
+        res = run_diagnose(dataset, without=eff, model=model, priors=priors, progress=prog,
+                           **opts)
         prog("figures", 0, 1)
         figs = write_diagnose_figures(res.family, res.diagnosis, stage.dir)
         prog("figures", 1, 1)

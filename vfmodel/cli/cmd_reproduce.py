@@ -32,10 +32,13 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")
 @click.option("--max-nfev", default=40, show_default=True, type=click.IntRange(5, 1000),
               help="Function evaluations per identification stage.")
+@click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
+              "the physical priors of the grey-box parameters (dataset.toml [machine], "
+              "[bearing], [priors]); model.rel_std in results.json is then posterior.")
 @out_option
 @quiet_option
-def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, out_dir: Path,
-              quiet: bool) -> None:
+def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, priors: bool,
+              out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
     recordings, lubricant per speed), validate it, compare it with the classical BVR model
     and a black-box fit. Writes DIR/results.json, figures (PNG), DIR/report.html and
@@ -51,7 +54,7 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, ou
         ds = read_dataset(dataset)
         prog = progress_bar(quiet)
         res = run(ds, sections=secs, blackbox=not no_blackbox, max_nfev=max_nfev,
-                  progress=prog)
+                  progress=prog, priors=priors)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

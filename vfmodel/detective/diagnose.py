@@ -150,7 +150,7 @@ def _try(family: Family, base: FitResult, cand: Candidate, max_nfev: int) -> Tri
     best = refit(family, applied, ps, new, max_nfev=max_nfev) if new else \
         refit(family, applied, ps, (), max_nfev=1)
     full = refit(family, applied, best.params, max_nfev=max_nfev)
-    if full.chi2 > best.chi2:   # the full refit never makes it worse than the partial one
+    if full.objective > best.objective:   # the full refit never makes it worse than the partial one
         full = refit(family, applied, best.params, max_nfev=max_nfev * 2)
     idx = [full.names.index(n) for n in new if n in full.names]
     mc, cw = 0.0, ""
@@ -240,7 +240,7 @@ def _best_start(family: Family, params: ParamSet, n_starts: int, seed: int,
     names = family.free_names((), params)
     for _ in range(n_starts - 1):
         f = refit(family, (), best.params.perturbed(rng, 0.3, names), max_nfev=max_nfev)
-        if f.chi2 < best.chi2:
+        if f.objective < best.objective:
             best = f
     return best
 
@@ -270,7 +270,7 @@ def _restarted(family: Family, base: FitResult, fit: FitResult, max_nfev: int,
     if p is None:
         return fit
     alt = refit(family, fit.applied, p, max_nfev=max_nfev)
-    return alt if alt.chi2 < fit.chi2 else fit
+    return alt if alt.objective < fit.objective else fit
 
 
 def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
@@ -331,7 +331,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         progress(stage, len(remaining), len(remaining))
         ctrl = out[0]
         assert isinstance(ctrl, FitResult)
-        if ctrl.chi2 < cur.chi2:
+        if ctrl.objective < cur.objective:
             # the base refitted with a candidate's budget is better than the base: the
             # candidates are measured against it, so that none wins by iterations alone
             cur = ctrl
@@ -382,7 +382,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
         remaining = [c for c in remaining if c.key != best.candidate.key]
     if unpolished:
         pol = refit(family, cur.applied, cur.params, max_nfev=max_nfev)
-        if pol.chi2 < cur.chi2:
+        if pol.objective < cur.objective:
             cur = pol
             findings[-1] = replace(findings[-1], after=cur)
             cur_mism = locate(family.channels, cur.residual, alpha=alpha)

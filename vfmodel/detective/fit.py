@@ -10,6 +10,13 @@ noise-normalised residual ``r``: ``chi2 = r.r``,
 Gauss-Newton covariance ``(J^T J)^-1`` of ``log p`` (standard deviations and correlations;
 a correlation near 1 means two parameters trade off against each other within the noise).
 
+A family with physical priors (attribute ``priors``: name -> :class:`vfmodel.greybox.
+priors.Prior`, e.g. :func:`vfmodel.detective.pmsm.pmsm_family` with ``priors=True``) is
+fitted maximum a posteriori: the whitened prior residuals of ``ln p`` are stacked below
+the data residuals, so the fit minimises ``chi2 + chi2_prior`` (``-2 ln`` posterior up to a
+constant), the covariance is the posterior one (data and prior information), and
+``BIC = chi2 + chi2_prior + k ln m``.
+
 References
 ----------
 G. Schwarz, "Estimating the dimension of a model", Ann. Statist. 6(2), 461-464, 1978.
@@ -20,7 +27,7 @@ doi:10.1137/S1064827595289108
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass
 
@@ -30,6 +37,7 @@ from numpy.typing import NDArray
 from vfmodel.detective.problem import Candidate, Family, log_residual
 from vfmodel.greybox.lsq import fit_log, log_covariance, log_start
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.priors import prior_residuals
 
 __all__ = ["FitResult", "evaluate", "refit"]
 
@@ -58,6 +66,9 @@ class FitResult:
         Standard deviation of ``log p`` of each fitted parameter (relative uncertainty).
     corr : (k, k) float
         Correlation matrix of ``log p`` (order of ``names``).
+    prior_chi2 : float
+        ``r_p.r_p`` of the whitened prior residuals of the fitted parameters (0 for a fit
+        without priors, see :func:`refit`); ``rel_std`` and ``corr`` are then posterior.
     """
 
     applied: tuple[Candidate, ...]
@@ -68,6 +79,7 @@ class FitResult:
     n_points: int
     rel_std: dict[str, float]
     corr: ArrF
+    prior_chi2: float = 0.0
 
     @property
     def k(self) -> int:
@@ -78,8 +90,16 @@ class FitResult:
         return self.chi2 / max(self.n_points - self.k, 1)
 
     @property
+    def objective(self) -> float:
+        """What the fit minimised: ``chi2 + prior_chi2`` (``-2 ln`` posterior up to a
+        constant; ``chi2`` without priors)."""
+        return self.chi2 + self.prior_chi2
+
+    @property
     def bic(self) -> float:
-        return self.chi2 + self.k * float(np.log(max(self.n_points, 2)))
+        """``objective + k ln m``: with priors the data's chi-square plus the prior's
+        (a candidate whose values physics makes implausible pays for them)."""
+        return self.objective + self.k * float(np.log(max(self.n_points, 2)))
 
 
 def evaluate(family: Family, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
@@ -146,20 +166,52 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
             cols.append((fun(x1) - r0) / h)
         return np.stack(cols, axis=1) if cols else np.zeros((r0.size, 0))
 
+    prior = _prior_rows(family, names)
+
+    def fun_map(x: ArrF) -> ArrF:
+        return np.concatenate([fun(x), prior(x)[0]])
+
+    def jac_map(x: ArrF) -> ArrF:
+        return np.vstack([jac(x), prior(x)[1]])
+
     # a family that can run its terms side by side keeps worker processes for the fit
     opener = getattr(family, "evaluation_pool", None)
     with opener(applied, params, names) if opener is not None else nullcontext():
         if names:
-            res = fit_log(fun, jac, x0, lo, hi, max_nfev=max_nfev, xtol=1e-8, ftol=1e-8,
-                          x_scale="jac")
+            res = fit_log(fun_map, jac_map, x0, lo, hi, max_nfev=max_nfev, xtol=1e-8,
+                          ftol=1e-8, x_scale="jac")
             x = res.x
-            jm = jac(x)
+            jm = jac_map(x)
         else:
             x = x0
             jm = np.zeros((fun(x0).size, 0))
         p = params.from_log(x, names)
         r_all = evaluate(family, applied, p)
     r = r_all[sel]
+    rp = prior(x)[0]
     std, corr = _covariance(jm)
     return FitResult(applied, p, names, r_all, float(r @ r), int(r.size),
-                     {n: float(s) for n, s in zip(names, std, strict=True)}, corr)
+                     {n: float(s) for n, s in zip(names, std, strict=True)}, corr,
+                     float(rp @ rp))
+
+
+def _prior_rows(family: Family, names: Sequence[str]
+                ) -> Callable[[ArrF], tuple[ArrF, ArrF]]:
+    """Whitened prior residuals of the fitted ``x = ln p`` and their Jacobian rows
+    (:func:`vfmodel.greybox.priors.prior_residuals`) for the names that have a prior in
+    the family's ``priors`` (a mapping name -> :class:`~vfmodel.greybox.priors.Prior`,
+    optional); stacked below the data residuals they make the fit maximum a posteriori
+    and its Gauss-Newton covariance the posterior one. No ``priors``: no rows."""
+    pri = getattr(family, "priors", None) or {}
+    idx = np.array([i for i, n in enumerate(names) if n in pri], dtype=int)
+    sub = [names[i] for i in idx]
+
+    def rows(x: ArrF) -> tuple[ArrF, ArrF]:
+        jm = np.zeros((idx.size, x.size))
+        if not idx.size:
+            return np.zeros(0), jm
+        r, dr = prior_residuals(x[idx], sub, pri)
+        jm[np.arange(idx.size), idx] = dr
+        return r, jm
+
+    return rows

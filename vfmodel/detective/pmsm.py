@@ -38,7 +38,7 @@ Jacobians are analytic (adjoint MNA sensitivities chained through the H1 estimat
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -81,6 +81,7 @@ from vfmodel.greybox.objective import (
     prepare_recording,
 )
 from vfmodel.greybox.params import ParamSet, ParamSpec
+from vfmodel.greybox.priors import Prior
 
 __all__ = ["LOCATIONS", "PmsmFamily", "pmsm_family", "speed_tag"]
 
@@ -142,6 +143,9 @@ class PmsmFamily:
     _pools: dict[frozenset[str], JobPool[Any]] = field(default_factory=dict, repr=False)
     # the staged identification of a structure (effects -> start values), see restart
     _identify: Callable[[frozenset[str]], ParamSet] | None = field(default=None, repr=False)
+    # physical priors of the parameters (maximum a posteriori refits, detective.fit), or
+    # None: least squares of the data alone
+    priors: Mapping[str, Prior] | None = None
 
     # ------------------------------------------------------------------ protocol
     @property
@@ -476,11 +480,15 @@ def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Prog
 
 def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: int = 101,
                 n_rungs: int = 3, sections: Sequence[int] = (2, 3, 4),
-                progress: Progress = no_progress) -> PmsmFamily:
+                priors: bool = False, progress: Progress = no_progress) -> PmsmFamily:
     """Identify the starting network on ``dataset`` and build the family.
 
     ``without``: effects of the paper's model left out of the starting network;
-    ``fit_points``: points per impedance spectrum used by the detective.
+    ``fit_points``: points per impedance spectrum used by the detective; ``priors``: the
+    detective's refits are maximum a posteriori with the physical priors of every
+    parameter (:func:`vfmodel.greybox.priors.parameter_priors` with the dataset's
+    ``[machine]``/``[bearing]``/``[priors]`` tables; a per-speed copy takes the prior at
+    its speed, :func:`vfmodel.detective.identifiability.grey_box_priors`).
     """
     wo = check_effects(without, "--without")
     bad = wo - PAPER_EFFECTS
@@ -506,7 +514,7 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
         # the detective scores the recordings by their H1 transfers (_bearing_term): its
         # start fits the standstill record the same way
         ident = identify(dataset, effects, sections=secs, n_rungs=n_rungs, prepared=prepared,
-                         progress=prog, standstill_fit="h1")
+                         progress=prog, standstill_fit="h1", priors=priors)
         st = _with_speed_copies(ident.params, prepared)
         vals: dict[str, float] = {}
         for sf in ident.speeds:
@@ -547,5 +555,11 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     # shares the memo of compiled terms
     fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports))
     cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
-    return replace(fam, _cands=cands)
+    pri = None
+    if priors:
+        from vfmodel.detective.identifiability import grey_box_priors
+
+        names = {*start.names, *(s.name for c in cands for s in c.params)}
+        pri = grey_box_priors(sorted(names), dataset)
+    return replace(fam, _cands=cands, priors=pri)
 

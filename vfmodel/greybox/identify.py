@@ -61,7 +61,7 @@ J. S. Bendat, A. G. Piersol, *Random Data*, 4th ed., Wiley, 2010 (H1 estimator).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -98,6 +98,7 @@ from vfmodel.greybox.objective import (
     prepare_recording,
 )
 from vfmodel.greybox.params import ParamSet
+from vfmodel.greybox.priors import Prior, parameter_priors, prior_residuals
 from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
@@ -262,7 +263,8 @@ accepts (``accepted`` counts them, the start being 1; ``nfev`` evaluations so fa
 def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequence[str],
               stage: str = "fit", max_nfev: int = 40, prior_sigma: float = 0.0,
               progress: Progress = no_progress,
-              stop: StopTest | None = None) -> tuple[ParamSet, StageReport]:
+              stop: StopTest | None = None,
+              priors: Mapping[str, Prior] | None = None) -> tuple[ParamSet, StageReport]:
     """Minimise the weighted residuals of ``terms`` over ``log`` of the ``names``.
 
     Trust-region reflective least squares within the parameters' bounds; the report holds
@@ -271,13 +273,37 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     ``(log p - log p_start) / prior_sigma`` (a weak Gaussian prior in log space): a
     parameter the data do not see (e.g. the air-gap capacitance at standstill, shorted by
     the metallic contact) then stays at its start instead of drifting along a flat valley;
-    its reported uncertainty is then about ``prior_sigma``.
+    its reported uncertainty is then about ``prior_sigma``. ``priors`` (name ->
+    :class:`vfmodel.greybox.priors.Prior`): a name with a physical prior gets its whitened
+    prior residual instead (:func:`vfmodel.greybox.priors.prior_residuals`: the fit is
+    maximum a posteriori and the reported uncertainty posterior).
 
     ``stop`` (:data:`StopTest`), when given, is asked at every accepted point whether the
     fit is worth continuing; a True answer raises :class:`StageAbandoned`.
     """
     names = tuple(names)
     x0, lo, hi = log_start(params, names)
+    phys = np.array([n in (priors or {}) for n in names], dtype=bool)
+    pnames = [n for n, b in zip(names, phys, strict=True) if b]
+    weak = ~phys if prior_sigma > 0 else np.zeros(len(names), dtype=bool)
+
+    def prior_rows(x: ArrF) -> tuple[list[ArrF], list[ArrF]]:
+        """Residuals and Jacobian rows of the physical priors and of the weak prior
+        towards the start (the names without a physical prior)."""
+        rs, js = [], []
+        if pnames:
+            assert priors is not None
+            r, dr = prior_residuals(x[phys], pnames, priors)
+            jm = np.zeros((r.size, x.size))
+            jm[np.arange(r.size), np.flatnonzero(phys)] = dr
+            rs.append(r)
+            js.append(jm)
+        if weak.any():
+            # weak prior towards the start: holds directions the data do not see
+            rs.append((x[weak] - x0[weak]) / prior_sigma)
+            js.append(np.eye(x.size)[weak] / prior_sigma)
+        return rs, js
+
     rcache: dict[bytes, ArrF] = {}
     jcache: dict[bytes, ArrF] = {}
     count = [0]
@@ -298,9 +324,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
             p = params.from_log(x, names)
             rs = [wgt * r for (r, _), (_, wgt) in zip(pool.map((p, False)), terms,
                                                       strict=True)]
-            if prior_sigma > 0:
-                # weak prior towards the start: holds directions the data do not see
-                rs.append((x - x0) / prior_sigma)
+            rs += prior_rows(x)[0]
             rcache.clear()
             rcache[key] = np.concatenate(rs)
             count[0] += 1
@@ -319,8 +343,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
             for (_, j), (_, wgt) in zip(pool.map((p, True)), terms, strict=True):
                 assert j is not None
                 js.append(wgt * j)
-            if prior_sigma > 0:
-                js.append(np.eye(x.size) / prior_sigma)
+            js += prior_rows(x)[1]
             jcache.clear()
             jcache[key] = np.concatenate(js)
         return jcache[key]
@@ -353,7 +376,8 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
 
 def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
              names: Sequence[str], stage: str, max_nfev: int, prior_sigma: float,
-             progress: Progress) -> tuple[ParamSet, StageReport]:
+             progress: Progress, priors: Mapping[str, Prior] | None = None
+             ) -> tuple[ParamSet, StageReport]:
     """The best (lowest chi2_red, ties to the first) of one fit per start; the starts are
     independent and run side by side in processes where :func:`parallel_map` can."""
     labels = [stage if len(starts) == 1 else f"{stage} (start {k + 1}/{len(starts)})"
@@ -361,7 +385,7 @@ def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
 
     def one(k: int, prog: Progress) -> tuple[ParamSet, StageReport]:
         return fit_stage(terms, starts[k], names, labels[k], max_nfev=max_nfev,
-                         prior_sigma=prior_sigma, progress=prog)
+                         prior_sigma=prior_sigma, progress=prog, priors=priors)
 
     results = parallel_map(one, len(starts), progress, labels, max_nfev)
     best: tuple[ParamSet, StageReport] | None = None
@@ -396,7 +420,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              hold_standstill: Sequence[str] = STANDSTILL_HIDDEN,
              rotating_fit: RotatingFit = "record", joint: bool = False,
              max_nfev_joint: int = 25,
-             standstill_fit: StandstillFit = "combined") -> Identification:
+             standstill_fit: StandstillFit = "combined",
+             priors: bool = False) -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -451,8 +476,15 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         without), while the
         peak errors stayed alike: mean 1.89 vs 2.08 %, worst 11.4 vs 10.8 %; its 15-25 s
         are then saved).
+    priors : bool
+        Maximum a posteriori: every stage's parameters with their physical priors
+        (:func:`vfmodel.greybox.priors.parameter_priors` of the dataset: the machine
+        stages at standstill, each lubricant stage at its speed) instead of the weak prior
+        towards the start; the stages' ``rel_std`` are then posterior. The joint stage
+        keeps the weak prior.
     """
     eff = check_effects(effects)
+    pri0 = parameter_priors(dataset, 0.0) if priors else None
     if not dataset.impedance and not dataset.recordings:
         raise InputError("dataset holds neither impedance spectra nor recordings",
                          source=dataset.name)
@@ -482,7 +514,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             pn, rep = fit_stage([(term, 1.0)], ps, [n for n in machine_names(ps, sp)
                                                     if n not in held],
                                 f"impedance, {cands[k]} sections", max_nfev=max_nfev,
-                                prior_sigma=prior_sigma, progress=prog)
+                                prior_sigma=prior_sigma, progress=prog, priors=pri0)
             return sp, pn, rep
 
         # the first two candidates are always fitted, the third often: all three side by
@@ -518,7 +550,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             wind = [n for n in names if n.startswith("winding.")]
             starts = [p] + [p.perturbed(rng, 0.5, wind) for _ in range(n_starts - 1)]
             p, rep = _best_of(starts, [(term, 1.0)], names, "impedance multistart", max_nfev,
-                              prior_sigma, progress)
+                              prior_sigma, progress, pri0)
             stages.append(rep)
         rel = rep.rel_std
         imp = impedance_term(dataset.impedance, spec, p)
@@ -552,7 +584,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         p, rep = fit_stage(terms, p, [n for n in names if n not in held],
                            f"standstill {stand[0]:g} rpm",
                            max_nfev=min(max_nfev, max_nfev_standstill),
-                           prior_sigma=prior_sigma, progress=progress)
+                           prior_sigma=prior_sigma, progress=progress, priors=pri0)
         stages.append(rep)
         rel = {**rel, **rep.rel_std}
     for s in stand:
@@ -574,7 +606,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         lterm.use_low_rank(cur, lub)
         fit_terms: list[tuple[Term, float]] = [(lterm, 1.0)]
         fit_p, rep = _best_of(starts, fit_terms, lub, f"lubricant {s:g} rpm", max_nfev,
-                              prior_sigma, progress)
+                              prior_sigma, progress,
+                              parameter_priors(dataset, s) if priors else None)
         stages.append(rep)
         fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep, rterm))
         cur = fit_p

@@ -25,7 +25,7 @@ from vfmodel.errors import InputError
 from vfmodel.greybox.effects import EFFECT_INFO
 
 __all__ = ["DiagnoseResult", "chi2_per_channel", "diagnosis_json", "identifiability_json",
-           "run_diagnose"]
+           "implausible_json", "run_diagnose"]
 
 
 @dataclass(frozen=True)
@@ -196,10 +196,33 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "null: not finite or not computed")}
 
 
+def implausible_json(family: Any, d: Diagnosis, dataset: Any) -> dict[str, Any]:
+    """``implausible`` of ``diagnosis.json``: the fitted values of the starting and the
+    final network far from their physical priors, with the effects that explain them and
+    what the detective found (:mod:`vfmodel.detective.evidence`)."""
+    from vfmodel.detective.evidence import N_SIGMA, implausible_evidence
+    from vfmodel.detective.identifiability import grey_box_priors
+
+    found = {f.candidate.effect: f.candidate.location for f in d.findings}
+    rejected = {c.effect: why for c, why in d.rejected}
+    out: dict[str, Any] = {"definition": f"fitted values more than {N_SIGMA:g} geometric "
+                           "sigmas of their physical prior from its median "
+                           "(vfmodel.greybox.priors), each with the effects of the "
+                           "vocabulary that explain such a value and their outcome"}
+    for key, fit in (("start", d.start), ("final", d.final)):
+        vals = {n: fit.params[n] for n in fit.names}
+        out[key] = implausible_evidence(vals, grey_box_priors(sorted(vals), dataset),
+                                        family.spec(fit.applied).effects, found, rejected)
+    return out
+
+
 def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
-                 model: str | Path | None = None, progress: Progress = no_progress,
-                 **options: Any) -> DiagnoseResult:
-    """Build the family, run :func:`vfmodel.detective.diagnose.diagnose`, compose JSON."""
+                 model: str | Path | None = None, priors: bool = False,
+                 progress: Progress = no_progress, **options: Any) -> DiagnoseResult:
+    """Build the family, run :func:`vfmodel.detective.diagnose.diagnose`, compose JSON.
+
+    ``priors``: maximum a posteriori refits with the physical priors (PMSM model only,
+    :func:`vfmodel.detective.pmsm.pmsm_family`)."""
     without = tuple(without)
     fam: Family
     ds = None
@@ -207,6 +230,9 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
         if without:
             raise InputError("--without applies to the PMSM model; with --model the candidate "
                              "changes are the model's .effect lines", place="--without")
+        if priors:
+            raise InputError("--priors applies to the PMSM model (its parameters have "
+                             "physical priors); a --model network has none", place="--priors")
         from vfmodel.detective.user_model import read_user_model, user_family
 
         fam = user_family(read_user_model(model), dataset, source=str(model))
@@ -215,12 +241,14 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
         from vfmodel.detective.pmsm import pmsm_family
 
         ds = read_dataset(dataset)
-        fam = pmsm_family(ds, without, progress=progress)
+        fam = pmsm_family(ds, without, priors=priors, progress=progress)
         options = {**PMSM_OPTIONS, **options}
     d = diagnose(fam, progress=progress, **options)
     doc = diagnosis_json(fam, d)
     progress("identifiability and recommendations", 0, 1)
     doc.update(identifiability_json(fam, d, ds))
+    if ds is not None:
+        doc["implausible"] = implausible_json(fam, d, ds)
     progress("identifiability and recommendations", 1, 1)
     if getattr(fam, "preps", ()):
         flagged = {m.where.rsplit(":", 1)[0] for m in d.mismatches

@@ -152,8 +152,11 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
-              standstill_fit: StandstillFit = "combined") -> ReproduceResult:
-    """Run the paper's pipeline on ``dataset`` (see the module docstring)."""
+              standstill_fit: StandstillFit = "combined",
+              priors: bool = False) -> ReproduceResult:
+    """Run the paper's pipeline on ``dataset`` (see the module docstring). ``priors``: the
+    identification is maximum a posteriori with the physical priors
+    (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
     if not dataset.impedance:
         raise InputError("reproduce needs impedance spectra", source=dataset.name,
                          expected="an [impedance] table in dataset.toml")
@@ -162,7 +165,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                          expected="[[recording]] entries in dataset.toml")
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
                      progress=progress, rotating_fit=rotating_fit,
-                     standstill_fit=standstill_fit)
+                     standstill_fit=standstill_fit, priors=priors)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
     # ---- impedance (Table II)
@@ -290,6 +293,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         **ident.spec.to_json_dict(),
         "params": ident.params.as_dict(),
         "rel_std": {n: _f(v) for n, v in ident.machine_rel_std.items()},
+        "estimate": "maximum a posteriori (physical priors)" if priors else
+                    "least squares (weak prior towards the start values)",
         "divider_intervals": divider_iv,
         "stages": [{"name": s.name, "chi2_red": s.chi2_red, "nfev": s.nfev,
                     "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],

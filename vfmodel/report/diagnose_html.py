@@ -203,6 +203,27 @@ def _identifiability(doc: dict[str, Any]) -> str:
     return "".join(out)
 
 
+def _implausible(doc: dict[str, Any]) -> str:
+    imp = doc.get("implausible") or {}
+    out = []
+    for key, title in (("start", "starting network"), ("final", "final network")):
+        rows = [(E(v["parameter"]), num(v.get("value"), unit_of(v["parameter"])),
+                 num(v.get("z_sigma"), "σ", digits=2),
+                 num(v.get("prior_median"), unit_of(v["parameter"])),
+                 "<span class='text'>" + ("; ".join(
+                     f"{E(x['effect'])}: {E(x['outcome'])}" for x in v["explained_by"])
+                     or "no effect of the vocabulary explains it") + "</span>")
+                for v in imp.get(key, [])]
+        if rows:
+            out += [f"<h3>Implausible values of the {title}</h3>",
+                    table(["parameter", "fitted", "from prior median", "prior median",
+                           "explained by (outcome)"], rows)]
+    if not out:
+        return ""
+    return ("<h2 id='implausible'>Values far from their physical prior</h2>"
+            f"<p class='text'>{E(str(imp.get('definition', '')))}</p>" + "".join(out))
+
+
 def diagnose_html(doc: dict[str, Any], figures: Sequence[str],
                   fig_dir: Path | None = None) -> str:
     """HTML text of the report; the PNG ``figures`` (names in ``fig_dir``) are embedded."""
@@ -219,7 +240,7 @@ def diagnose_html(doc: dict[str, Any], figures: Sequence[str],
                    f"<b>{E(str(doc.get('sentence', '')))}</b>", checks, look, key_fig,
                    reference_name="reference")
     body = [head, _mismatches(doc), _findings(doc), _windows(doc), _identifiability(doc),
-            _rejected(doc), "<h2>Figures</h2><div class='figs'>"
+            _implausible(doc), _rejected(doc), "<h2>Figures</h2><div class='figs'>"
             + "".join(figure(fig_dir, f) for f in figures if f != key_name) + "</div>"]
     return html_page(f"vfmodel diagnose: {doc.get('model', '')}", body)
 
