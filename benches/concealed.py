@@ -75,6 +75,7 @@ from vfmodel.greybox.params import ParamSet
 
 __all__ = [
     "BEARING_CASES",
+    "COMMITTED_BEARING",
     "LOCATIONS",
     "PMSM_CASES",
     "BenchConfig",
@@ -227,7 +228,10 @@ def _bearing_cases() -> tuple[ConcealedCase, ...]:
                                ("hertzian_edge_capacitance",)),
                               ("pmsm_edge", "hertzian_edge_capacitance",
                                ("lubricant_dielectric_loss",)),
-                              ("pmsm_null_bearing", None, ("lubricant_two_layer",))):
+                              ("pmsm_null_bearing", None, ("lubricant_two_layer",)),
+                              ("pmsm_null_bearing_all", None,
+                               ("metallic_contact", "lubricant_two_layer",
+                                "lubricant_dielectric_loss", "hertzian_edge_capacitance"))):
         for extra in (False, True):
             note = (_BEARING if eff else "null, " + _BEARING.split(", ", 1)[1]) + \
                 (_X if extra else "")
@@ -238,8 +242,14 @@ def _bearing_cases() -> tuple[ConcealedCase, ...]:
 
 
 BEARING_CASES: tuple[ConcealedCase, ...] = _bearing_cases()
-"""Bearing-side cases (issue 14): two-layer film and metallic contact concealed, and a
-null case, each without and with (``_x``) the further measurements; a pair shares truth
+COMMITTED_BEARING = ("pmsm_two_layer_x", "pmsm_contact_x", "pmsm_null_bearing_x")
+"""The bearing-side cases in ``data/concealed`` (1.7 MB each); the others (lubricant loss,
+edge capacitance, the second null, every case without extras) are made with
+``scripts/make_concealed.py --only NAME,... --out DIR``."""
+"""Bearing-side cases (issue 14): two-layer film, metallic contact, lubricant dielectric
+loss and Hertzian edge capacitance concealed, and two null cases (``pmsm_null_bearing_all``:
+truth and network without any of the four, all of them decoys), each without and with
+(``_x``) the further measurements; a pair shares truth
 and noise (:attr:`ConcealedCase.draw`). The committed ones are those with the extras
 (``data/concealed``); those without are the same data less the extras
 (``scripts/make_concealed.py --only pmsm_two_layer --out DIR``)."""

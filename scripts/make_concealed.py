@@ -17,9 +17,11 @@ the detective's network (skin-effect ladders with more rungs, more winding secti
 the starting model cannot reproduce the data exactly even where nothing is concealed.
 
 Bearing-side cases (:data:`benches.concealed.BEARING_CASES`, issue 14): two-layer film,
-metallic contact and a null case, with the further measurements of CONTRACT section 2a
-(``<name>_x``, committed) or without them (same truth and noise less the extras; only
-with ``--only``, e.g. ``--only pmsm_two_layer,pmsm_contact --out DIR``).
+metallic contact, lubricant dielectric loss, edge capacitance and two null cases, with the
+further measurements of CONTRACT section 2a (``<name>_x``; those of
+:data:`benches.concealed.COMMITTED_BEARING` are committed) or without them (same truth and
+noise less the extras); the uncommitted ones only with ``--only``, e.g. ``--only
+pmsm_two_layer,pmsm_edge_x --out DIR``.
 
 PMSM cases (:data:`benches.concealed.PMSM_CASES`): each entry also holds ``size``
 (the effect's parameter values), ``proxy_chi2_red`` and ``proxy`` (calibration fit of the
@@ -41,6 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benches pack
 
 from benches.concealed import (
     BEARING_CASES,
+    COMMITTED_BEARING,
     PMSM_CASES,
     BenchConfig,
     ConcealedCase,
@@ -169,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"wrote {out / name}", file=sys.stderr)
     for pc in PMSM_CASES + BEARING_CASES:
         if (only and pc.name not in only) or (not only and pc in BEARING_CASES
-                                               and not pc.extra):
+                                               and pc.name not in COMMITTED_BEARING):
             continue
         t0 = time.perf_counter()
         cases[pc.name] = make_pmsm_case(out / pc.name, pc, a.seed, a.unseen,

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benches.concealed import BEARING_CASES, BenchConfig, generate
+from benches.concealed import BEARING_CASES, COMMITTED_BEARING, BenchConfig, generate
 from benches.drive_extra import shaft_frame_impedance
 from benches.truth import lubricant_at_speed
 from vfmodel.core.io_dataset import read_dataset
@@ -21,13 +21,15 @@ ROOT = Path(__file__).resolve().parents[1]
 DIR = ROOT / "data" / "concealed"
 CASES: dict[str, dict[str, object]] = json.loads((DIR / "cases.json").read_text())
 BY_NAME = {c.name: c for c in BEARING_CASES}
-COMMITTED = [c.name for c in BEARING_CASES if c.extra]
+COMMITTED = list(COMMITTED_BEARING)
 SIG = BenchConfig().z_noise / np.sqrt(2)          # noise of each component of log Z
 
 
 def test_bearing_cases_listed_and_readable() -> None:
     assert {c.effect for c in BEARING_CASES} == {"lubricant_two_layer", "metallic_contact",
-                                                  None}
+                                                  "lubricant_dielectric_loss",
+                                                  "hertzian_edge_capacitance", None}
+    assert set(COMMITTED) <= set(BY_NAME) and all(BY_NAME[n].extra for n in COMMITTED)
     for name in COMMITTED:
         c = BY_NAME[name]
         e = CASES[name]
