@@ -23,6 +23,10 @@ Channels (the data the detective compares with):
   spectra of CONTRACT section 2a when the dataset holds them (standstill and recorded
   speeds; :mod:`vfmodel.detective.shaft_frame`), after the records. The staged
   identification does not use them; the detective's fits do.
+- ``bearing_de:<rpm>rpm:<phase>`` and ``i_cm:<rpm>rpm:<phase>``: the further recording
+  channels ``u_B_DE`` and ``i_CM`` of CONTRACT section 2a when a recording carries them,
+  treated as ``u_B`` is (:mod:`vfmodel.detective.record_channels`), last. Likewise only
+  the detective's fits use them.
 
 Parameters: the machine parameters of the standstill network (shared by every channel)
 and, per rotating speed ``s``, a copy ``<name>@<s>rpm`` of each speed-dependent lubricant
@@ -54,6 +58,7 @@ from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
 from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
@@ -71,10 +76,12 @@ from vfmodel.greybox.identify import (
 )
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.objective import (
+    BEARING_QUANTITY,
     BearingTerm,
     ImpedanceTerm,
     LogMap,
     PreparedRecording,
+    RecordQuantity,
     bearing_term,
     impedance_term,
     log_map,
@@ -132,6 +139,7 @@ class PmsmFamily:
     start: ParamSet
     _cands: tuple[Candidate, ...] = ()
     ports: tuple[PortTerm, ...] = ()    # shaft-to-frame spectra, channels after the records
+    records: tuple[RecordChannelTerm, ...] = ()   # u_B_DE, i_CM: channels after the ports
     # compiled terms per structure (a memo of pure functions of the structure, not state)
     _memo: dict[frozenset[str], tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]] = \
         field(default_factory=dict, repr=False)
@@ -238,6 +246,8 @@ class PmsmFamily:
             h = bt.h1_model(self.at_speed(params, p.speed_rpm))
             out += [h[:, i] for i in range(h.shape[1])]
         out += [t.model(self, applied, params) for t in self.ports]
+        for rt in self.records:
+            out += rt.model(self, applied, params)
         return out
 
     def residual(self, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
@@ -274,6 +284,10 @@ class PmsmFamily:
             if names is not None:
                 assert jm is not None
                 js.append(jm)
+        for rt in self.records:         # further record channels (u_B_DE, i_CM): here too
+            r3, j3 = rt.residual(self, applied, params, names)
+            rs += r3
+            js += j3
         return np.concatenate(rs), (np.concatenate(js) if names is not None else None)
 
     @contextmanager
@@ -413,14 +427,16 @@ band and bin step")."""
 
 
 def _bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
-                  state: BearingState) -> BearingTerm:
+                  state: BearingState,
+                  quantity: RecordQuantity = BEARING_QUANTITY) -> BearingTerm:
     """Condition-2 term of the detective: no model-error floor, the three components of
     each H1 bin whitened by the estimate's full covariance (unit variance under the null
     hypothesis), the input-noise bias of H1 modelled where the record allows it, bins up
-    to :data:`BEARING_F_MAX_HZ`, every :data:`BEARING_BIN_STEP`-th bin."""
+    to :data:`BEARING_F_MAX_HZ`, every :data:`BEARING_BIN_STEP`-th bin. ``quantity``: what
+    ``prep`` measures (u_B; the further record channels, :mod:`.record_channels`)."""
     return bearing_term(prep, spec, params, state, f_max_hz=BEARING_F_MAX_HZ,
                         model_error=0.0, weighting="covariance", input_noise=True,
-                        bin_step=BEARING_BIN_STEP)
+                        bin_step=BEARING_BIN_STEP, quantity=quantity)
 
 
 def _candidate(effect: str, base: ParamSet, family: PmsmFamily) -> Candidate:
@@ -544,8 +560,13 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
     chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
               for t, m, bb in ports]
+    records = record_terms(recs, preps, _bearing_term)
+    for k, rt in enumerate(records):
+        progress("further record channels", k, len(records))
+        chans += rt.channels(fam, start)
     # shares the memo of compiled terms
-    fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports))
+    fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports),
+                  records=tuple(records))
     cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
     return replace(fam, _cands=cands)
 
