@@ -170,6 +170,12 @@ def test_dataset_without_the_channels_keeps_its_channel_list(
         np.testing.assert_array_equal(a.measured, b.measured)
         np.testing.assert_array_equal(a.sigma, b.sigma)
     r0 = fam0.residual((), fam0.start)
-    r1 = fam.residual((), fam.start)
+    names = ("insulation.C_wr", "lubricant.C_1@100rpm")
+    r1, j1 = fam.residual_jacobian((), fam.start, names)
     np.testing.assert_array_equal(r1[:r0.size], r0)
     assert r1.size == r0.size + sum(2 * c.n for c in fam.channels[len(old):])
+    # the same from the evaluation pool (every term in a worker, the channels in order)
+    with fam.evaluation_pool((), fam.start, names):
+        r2, j2 = fam.residual_jacobian((), fam.start, names)
+    np.testing.assert_array_equal(r2, r1)
+    np.testing.assert_array_equal(j2, j1)

@@ -264,7 +264,7 @@ class PmsmFamily:
     def _residual(self, applied: Sequence[Candidate], params: ParamSet,
                   names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
         imp, bts = self._terms(applied, params)
-        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        jobs = self._jobs(imp, bts)
         pool = self._pools.get(_structure(self.base_effects, applied))
         if pool is not None:
             # the record transfers (eigenvalues, ~50 ms each) and Jacobians (adjoint solves
@@ -273,22 +273,34 @@ class PmsmFamily:
             parts = pool.map((params, names))
             for k, pr in zip(jobs, parts, strict=True):
                 if k >= 0 and pr[2] is not None:
-                    bts[k]._memo.restore(pr[2])
+                    self._record_term(applied, params, k)._memo.restore(pr[2])
         else:
             parts = [self._part(applied, params, names, k) for k in jobs]
-        rs = [r for pr in parts for r in pr[0]]
-        js = [j for pr in parts for j in pr[1]]
+        nb = len(parts) - len(self.records)     # the further record channels come last
+        rs = [r for pr in parts[:nb] for r in pr[0]]
+        js = [j for pr in parts[:nb] for j in pr[1]]
         for port in self.ports:         # further impedances (Shaft-Frame): small, here
             r, jm = port.residual(self, applied, params, names)
             rs.append(r)
             if names is not None:
                 assert jm is not None
                 js.append(jm)
-        for rt in self.records:         # further record channels (u_B_DE, i_CM): here too
-            r3, j3 = rt.residual(self, applied, params, names)
-            rs += r3
-            js += j3
+        rs += [r for pr in parts[nb:] for r in pr[0]]
+        js += [j for pr in parts[nb:] for j in pr[1]]
         return np.concatenate(rs), (np.concatenate(js) if names is not None else None)
+
+    def _jobs(self, imp: ImpedanceTerm | None, bts: Sequence[BearingTerm]) -> list[int]:
+        """Terms of an evaluation: -1 the impedances, ``0 .. len(bts) - 1`` the u_B records,
+        then the further record channels (:attr:`records`)."""
+        return ([-1] if imp is not None else []) + list(range(len(bts) + len(self.records)))
+
+    def _record_term(self, applied: Sequence[Candidate], params: ParamSet, k: int
+                     ) -> BearingTerm:
+        """The record term of job ``k >= 0`` (a u_B record or a further record channel)."""
+        bts = self._terms(applied, params)[1]
+        if k < len(bts):
+            return bts[k]
+        return self.records[k - len(bts)].term(self, applied, params)
 
     @contextmanager
     def evaluation_pool(self, applied: Sequence[Candidate], params: ParamSet,
@@ -301,7 +313,9 @@ class PmsmFamily:
         and every fit uses the maps of the first one (as in sequence)."""
         key = _structure(self.base_effects, applied)
         imp, bts = self._terms(applied, params)
-        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        jobs = self._jobs(imp, bts)
+        for k in jobs[len(jobs) - len(self.records):]:
+            self._record_term(applied, params, k)       # compiled here, inherited
         if names:
             for k in jobs:
                 self._part_names(applied, params, tuple(names), k)
@@ -332,10 +346,11 @@ class PmsmFamily:
             if loc:
                 self._lmap(applied, params, loc)
             return loc, cols
-        p = self.preps[k]
-        loc, cols = local_names(names, p.speed_rpm, params)
+        rpm = self.preps[k].speed_rpm if k < len(self.preps) else \
+            self.records[k - len(self.preps)].speed_rpm
+        loc, cols = local_names(names, rpm, params)
         if loc:
-            self._lmap(applied, self.at_speed(params, p.speed_rpm), loc)
+            self._lmap(applied, self.at_speed(params, rpm), loc)
         return loc, cols
 
     def _part(self, applied: Sequence[Candidate], params: ParamSet,
@@ -346,6 +361,10 @@ class PmsmFamily:
         jac = names is not None
         nn = names or ()
         imp, bts = self._terms(applied, params)
+        if k >= len(bts):               # a further record channel (u_B_DE, i_CM)
+            rt = self.records[k - len(bts)]
+            r3, j3 = rt.residual(self, applied, params, names)
+            return r3, j3, rt.term(self, applied, params)._memo.entry()
         rs: list[ArrF] = []
         js: list[ArrF] = []
         if k < 0:
