@@ -339,8 +339,8 @@ class PmsmFamily:
 
     def _part_names(self, applied: Sequence[Candidate], params: ParamSet,
                     names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
-        """Local parameter names of term ``k`` (-1: the impedances) and their columns;
-        builds the term's log map."""
+        """Local parameter names of term ``k`` (-1: the impedances; from ``len(preps)`` on
+        the further record channels) and their columns; builds the term's log map."""
         if k < 0:
             loc, cols = local_names(names, 0.0, params)
             if loc:
@@ -356,8 +356,9 @@ class PmsmFamily:
     def _part(self, applied: Sequence[Candidate], params: ParamSet,
               names: tuple[str, ...] | None, k: int
               ) -> tuple[list[ArrF], list[ArrF], tuple[bytes, ArrC] | None]:
-        """Residual channels (and Jacobian blocks) of term ``k`` (-1: the impedances), and
-        the record term's memo entry (None for the impedances)."""
+        """Residual channels (and Jacobian blocks) of term ``k`` (-1: the impedances; from
+        ``len(preps)`` on the further record channels), and the record term's memo entry
+        (None for the impedances)."""
         jac = names is not None
         nn = names or ()
         imp, bts = self._terms(applied, params)
