@@ -25,7 +25,7 @@ Measured (``diagnose DATASET --without <the case's list in cases.json>``, this c
 main 13331ee, on a 2-core machine shared with other runs): on ``data/concealed/
 pmsm_two_layer_x``, ``pmsm_contact_x``, ``pmsm_null_bearing_x`` and a second draw
 (``scripts/make_concealed.py --seed 11 --unseen``) of the two-layer and null cases the
-channels add 1146-1242 residual entries to 2250-2328 and the findings are those of main
+channels add 1164-1242 residual entries to 2250-2328 and the findings are those of main
 (the null cases gain nothing). Mean chi2 per entry of the new channels at the final fit
 0.74-0.94 (single channels 0.37-2.1), as the u_B channels of the same records (0.90-1.13)
 below 1 at speed; with the metallic contact concealed they carry 5.7 per entry (2.4-13.3)
