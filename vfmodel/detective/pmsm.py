@@ -23,6 +23,10 @@ Channels (the data the detective compares with):
   spectra of CONTRACT section 2a when the dataset holds them (standstill and recorded
   speeds; :mod:`vfmodel.detective.shaft_frame`), after the records. The staged
   identification does not use them; the detective's fits do.
+- ``bearing_de:<rpm>rpm:<phase>`` and ``i_cm:<rpm>rpm:<phase>``: the further recording
+  channels ``u_B_DE`` and ``i_CM`` of CONTRACT section 2a when a recording carries them,
+  treated as ``u_B`` is (:mod:`vfmodel.detective.record_channels`), last. Likewise only
+  the detective's fits use them.
 
 Parameters: the machine parameters of the standstill network (shared by every channel)
 and, per rotating speed ``s``, a copy ``<name>@<s>rpm`` of each speed-dependent lubricant
@@ -54,6 +58,7 @@ from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
 from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
@@ -71,10 +76,12 @@ from vfmodel.greybox.identify import (
 )
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.objective import (
+    BEARING_QUANTITY,
     BearingTerm,
     ImpedanceTerm,
     LogMap,
     PreparedRecording,
+    RecordQuantity,
     bearing_term,
     impedance_term,
     log_map,
@@ -133,6 +140,7 @@ class PmsmFamily:
     start: ParamSet
     _cands: tuple[Candidate, ...] = ()
     ports: tuple[PortTerm, ...] = ()    # shaft-to-frame spectra, channels after the records
+    records: tuple[RecordChannelTerm, ...] = ()   # u_B_DE, i_CM: channels after the ports
     # compiled terms per structure (a memo of pure functions of the structure, not state)
     _memo: dict[frozenset[str], tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]] = \
         field(default_factory=dict, repr=False)
@@ -242,6 +250,8 @@ class PmsmFamily:
             h = bt.h1_model(self.at_speed(params, p.speed_rpm))
             out += [h[:, i] for i in range(h.shape[1])]
         out += [t.model(self, applied, params) for t in self.ports]
+        for rt in self.records:
+            out += rt.model(self, applied, params)
         return out
 
     def residual(self, applied: Sequence[Candidate], params: ParamSet) -> ArrF:
@@ -258,7 +268,7 @@ class PmsmFamily:
     def _residual(self, applied: Sequence[Candidate], params: ParamSet,
                   names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
         imp, bts = self._terms(applied, params)
-        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        jobs = self._jobs(imp, bts)
         pool = self._pools.get(_structure(self.base_effects, applied))
         if pool is not None:
             # the record transfers (eigenvalues, ~50 ms each) and Jacobians (adjoint solves
@@ -267,18 +277,34 @@ class PmsmFamily:
             parts = pool.map((params, names))
             for k, pr in zip(jobs, parts, strict=True):
                 if k >= 0 and pr[2] is not None:
-                    bts[k]._memo.restore(pr[2])
+                    self._record_term(applied, params, k)._memo.restore(pr[2])
         else:
             parts = [self._part(applied, params, names, k) for k in jobs]
-        rs = [r for pr in parts for r in pr[0]]
-        js = [j for pr in parts for j in pr[1]]
+        nb = len(parts) - len(self.records)     # the further record channels come last
+        rs = [r for pr in parts[:nb] for r in pr[0]]
+        js = [j for pr in parts[:nb] for j in pr[1]]
         for port in self.ports:         # further impedances (Shaft-Frame): small, here
             r, jm = port.residual(self, applied, params, names)
             rs.append(r)
             if names is not None:
                 assert jm is not None
                 js.append(jm)
+        rs += [r for pr in parts[nb:] for r in pr[0]]
+        js += [j for pr in parts[nb:] for j in pr[1]]
         return np.concatenate(rs), (np.concatenate(js) if names is not None else None)
+
+    def _jobs(self, imp: ImpedanceTerm | None, bts: Sequence[BearingTerm]) -> list[int]:
+        """Terms of an evaluation: -1 the impedances, ``0 .. len(bts) - 1`` the u_B records,
+        then the further record channels (:attr:`records`)."""
+        return ([-1] if imp is not None else []) + list(range(len(bts) + len(self.records)))
+
+    def _record_term(self, applied: Sequence[Candidate], params: ParamSet, k: int
+                     ) -> BearingTerm:
+        """The record term of job ``k >= 0`` (a u_B record or a further record channel)."""
+        bts = self._terms(applied, params)[1]
+        if k < len(bts):
+            return bts[k]
+        return self.records[k - len(bts)].term(self, applied, params)
 
     @contextmanager
     def evaluation_pool(self, applied: Sequence[Candidate], params: ParamSet,
@@ -291,7 +317,9 @@ class PmsmFamily:
         and every fit uses the maps of the first one (as in sequence)."""
         key = _structure(self.base_effects, applied)
         imp, bts = self._terms(applied, params)
-        jobs = ([-1] if imp is not None else []) + list(range(len(bts)))
+        jobs = self._jobs(imp, bts)
+        for k in jobs[len(jobs) - len(self.records):]:
+            self._record_term(applied, params, k)       # compiled here, inherited
         if names:
             for k in jobs:
                 self._part_names(applied, params, tuple(names), k)
@@ -315,27 +343,33 @@ class PmsmFamily:
 
     def _part_names(self, applied: Sequence[Candidate], params: ParamSet,
                     names: tuple[str, ...], k: int) -> tuple[list[str], list[int]]:
-        """Local parameter names of term ``k`` (-1: the impedances) and their columns;
-        builds the term's log map."""
+        """Local parameter names of term ``k`` (-1: the impedances; from ``len(preps)`` on
+        the further record channels) and their columns; builds the term's log map."""
         if k < 0:
             loc, cols = local_names(names, 0.0, params)
             if loc:
                 self._lmap(applied, params, loc)
             return loc, cols
-        p = self.preps[k]
-        loc, cols = local_names(names, p.speed_rpm, params)
+        rpm = self.preps[k].speed_rpm if k < len(self.preps) else \
+            self.records[k - len(self.preps)].speed_rpm
+        loc, cols = local_names(names, rpm, params)
         if loc:
-            self._lmap(applied, self.at_speed(params, p.speed_rpm), loc)
+            self._lmap(applied, self.at_speed(params, rpm), loc)
         return loc, cols
 
     def _part(self, applied: Sequence[Candidate], params: ParamSet,
               names: tuple[str, ...] | None, k: int
               ) -> tuple[list[ArrF], list[ArrF], tuple[bytes, ArrC] | None]:
-        """Residual channels (and Jacobian blocks) of term ``k`` (-1: the impedances), and
-        the record term's memo entry (None for the impedances)."""
+        """Residual channels (and Jacobian blocks) of term ``k`` (-1: the impedances; from
+        ``len(preps)`` on the further record channels), and the record term's memo entry
+        (None for the impedances)."""
         jac = names is not None
         nn = names or ()
         imp, bts = self._terms(applied, params)
+        if k >= len(bts):               # a further record channel (u_B_DE, i_CM)
+            rt = self.records[k - len(bts)]
+            r3, j3 = rt.residual(self, applied, params, names)
+            return r3, j3, rt.term(self, applied, params)._memo.entry()
         rs: list[ArrF] = []
         js: list[ArrF] = []
         if k < 0:
@@ -417,14 +451,16 @@ band and bin step")."""
 
 
 def _bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
-                  state: BearingState) -> BearingTerm:
+                  state: BearingState,
+                  quantity: RecordQuantity = BEARING_QUANTITY) -> BearingTerm:
     """Condition-2 term of the detective: no model-error floor, the three components of
     each H1 bin whitened by the estimate's full covariance (unit variance under the null
     hypothesis), the input-noise bias of H1 modelled where the record allows it, bins up
-    to :data:`BEARING_F_MAX_HZ`, every :data:`BEARING_BIN_STEP`-th bin."""
+    to :data:`BEARING_F_MAX_HZ`, every :data:`BEARING_BIN_STEP`-th bin. ``quantity``: what
+    ``prep`` measures (u_B; the further record channels, :mod:`.record_channels`)."""
     return bearing_term(prep, spec, params, state, f_max_hz=BEARING_F_MAX_HZ,
                         model_error=0.0, weighting="covariance", input_noise=True,
-                        bin_step=BEARING_BIN_STEP)
+                        bin_step=BEARING_BIN_STEP, quantity=quantity)
 
 
 def _candidate(effect: str, base: ParamSet, family: PmsmFamily) -> Candidate:
@@ -554,8 +590,13 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
     chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
               for t, m, bb in ports]
+    records = record_terms(recs, preps, _bearing_term)
+    for k, rt in enumerate(records):
+        progress("further record channels", k, len(records))
+        chans += rt.channels(fam, start)
     # shares the memo of compiled terms
-    fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports))
+    fam = replace(fam, channels=tuple(chans), ports=tuple(t for t, _, _ in ports),
+                  records=tuple(records))
     cands = tuple(_candidate(e, start, fam) for e in sorted(ALL_EFFECTS - base))
     pri = None
     if priors:

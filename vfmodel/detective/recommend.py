@@ -90,7 +90,7 @@ from vfmodel.detective.fit import FitResult, evaluate
 from vfmodel.detective.problem import Candidate
 from vfmodel.detective.shaft_frame import local_names
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
-from vfmodel.greybox.objective import dlogv_dlogp
+from vfmodel.greybox.objective import RECORD_QUANTITIES, dlogv_dlogp, quantity_vector
 from vfmodel.greybox.params import ParamSet
 
 __all__ = ["IMPEDANCE_SIGMA_DEFAULT", "Comparison", "Net", "Recommendation", "comparisons",
@@ -103,8 +103,7 @@ IMPEDANCE_SIGMA_DEFAULT = 0.005
 """Noise of ``Re ln Z`` and ``Im ln Z`` of an impedance measurement when the dataset has no
 spectra to estimate it from (0.5 % and 5 mrad, an impedance analyser's basic accuracy)."""
 
-_OUT = ("SD", BEARING_NODE, *(f"i({s})" for s in SOURCES))
-_DE_NODE = "SD"
+_CHANNELS = ("u_B_DE", "u_B", "i_CM")
 
 
 @dataclass(frozen=True)
@@ -166,12 +165,15 @@ def _shaft_frame(family: Any, fit: Net, rpm: float, freq: ArrF) -> ArrC:
 
 
 def _transfers(family: Any, fit: Net, rpm: float, freq: ArrF) -> dict[str, ArrC]:
-    """``(n_f, 3)`` transfers from the terminal voltages to ``u_B_DE``, ``u_B``, ``i_CM``."""
+    """``(n_f, 3)`` transfers from the terminal voltages to ``u_B_DE``, ``u_B``, ``i_CM``
+    (the network quantities of :data:`vfmodel.greybox.objective.RECORD_QUANTITIES`, which the
+    detective's record channels use too)."""
     spec = family.spec(fit.applied)
     c = spec.build(family.at_speed(fit.params, rpm), family.state(rpm, fit.applied),
                    sources=True)
-    h = c.mna.response(freq, SOURCES, _OUT)
-    return {"u_B_DE": h[:, 0, :], "u_B": h[:, 1, :], "i_CM": h[:, 2:, :].sum(axis=1)}
+    cout = np.hstack([quantity_vector(c.mna, RECORD_QUANTITIES[k]) for k in _CHANNELS])
+    h = c.mna.solve(freq, c.mna.input_matrix(list(SOURCES)), cout).h
+    return {k: h[:, i, :] for i, k in enumerate(_CHANNELS)}
 
 
 def _dlnz_dlnp(family: Any, fit: Net, names: Sequence[str], rpm: float, freq: ArrF

@@ -24,7 +24,7 @@ in ``x`` (each costs one pole-residue evaluation of the network, :mod:`vfmodel.c
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -60,6 +60,31 @@ _FD_MAX = 12
 _J_DENSE_HZ = 50e3     # adjoint grid of the record Jacobians: every record bin up to here
 _J_LOG_POINTS = 300    # ... then this many log-spaced points
 _J_TOP = 1.5           # condition 2: up to this multiple of the highest tested bin
+
+RecordQuantity = tuple[tuple[str, float], ...]
+"""The quantity a record term compares: a weighted sum ``sum_k w_k y_k`` of network outputs
+(node voltages to ground, ``"i(<element>)"`` branch currents) of the network driven by the
+terminal sources. ``((BEARING_NODE, 1.0),)`` is the paper's bearing voltage ``u_B``."""
+
+BEARING_QUANTITY: RecordQuantity = ((BEARING_NODE, 1.0),)
+
+RECORD_QUANTITIES: dict[str, RecordQuantity] = {
+    "u_B": BEARING_QUANTITY,
+    "u_B_DE": (("SD", 1.0),),
+    # the sources' branch currents flow from the terminal through the source to the frame
+    # (MNA convention): the current into the machine is their negative (measured: the sum
+    # is -j 3.2e-4 A/V at 10 kHz on the paper's network, a capacitive current into it)
+    "i_CM": tuple((f"i({src})", -1.0) for src in SOURCES),
+}
+"""The network quantity of each recording channel (CONTRACT sections 2 and 2a): ``u_B``
+(NDE shaft end ``SN`` to frame), ``u_B_DE`` (drive-end shaft end ``SD`` to frame) and
+``i_CM`` (the sum of the three phase currents into the machine terminals)."""
+
+
+def quantity_vector(mna: MnaSystem, quantity: RecordQuantity) -> ArrF:
+    """``Cout`` (N, 1) of ``quantity``: the weighted sum of the probes' output columns."""
+    c = mna.output_matrix([name for name, _ in quantity])
+    return np.asarray(c @ np.array([w for _, w in quantity], dtype=float)[:, None])
 
 
 def values_of(params: ParamSet, spec: NetSpec, state: BearingState,
@@ -250,24 +275,46 @@ def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
     """Filter (brickwall), transform and H1-analyse a recording (paper Sec. II-C, III-C)."""
     fs = rec.fs
     x = brickwall_filter(rec.terminals, fs, f_cut_hz)
-    y = brickwall_filter(rec.bearing, fs, f_cut_hz)
     n = x.shape[1]
     freq = sfft.rfftfreq(n, 1.0 / fs)
     sel = freq <= min(f_cut_hz, fs / 2)
     xb = sfft.rfft(x, axis=1)[:, sel]
     q = max(1, int(fs // (2.5 * f_cut_hz)))
     n_h1 = n // q
-    if q > 1:
-        xh = resample_periodic(xb, n, n_h1)
-        yh = resample_periodic(sfft.rfft(y)[sel], n, n_h1)
-    else:
-        xh, yh = x, y
+    xh = resample_periodic(xb, n, n_h1) if q > 1 else x
     if nperseg is not None and q > 1:
         nperseg = max(16, nperseg // q)
+    y, yh = _output_at_h1_rate(rec.bearing, fs, f_cut_hz, sel, n_h1)
     h1 = h1_analysis(xh, yh, fs * n_h1 / n, nperseg=nperseg,
                      input_names=["u_U", "u_V", "u_W"], output_names=["u_B"])
     return PreparedRecording(float(rec.speed_rpm or 0.0), fs, x, y, freq[sel], xb, n_h1, xh,
                              h1)
+
+
+def _output_at_h1_rate(y_raw: ArrF, fs: float, f_cut_hz: float, sel: NDArray[np.bool_],
+                       n_h1: int) -> tuple[ArrF, ArrF]:
+    """An output channel filtered (full rate) and resampled to the H1 rate ``n_h1``."""
+    y = brickwall_filter(y_raw, fs, f_cut_hz)
+    n = y.size
+    yh = resample_periodic(sfft.rfft(y)[sel], n, n_h1) if n_h1 < n else y
+    return y, yh
+
+
+def prepare_output(prep: PreparedRecording, y_raw: ArrF, name: str,
+                   f_cut_hz: float = F_CUT_HZ) -> PreparedRecording:
+    """``prep`` with another output channel of the same record (e.g. ``u_B_DE``, ``i_CM``)
+    in place of ``u_B``: the channel filtered and resampled as ``u_B`` is, and its H1 from
+    the same terminal voltages with the same estimator settings (segment length, overlap,
+    window), so that :func:`bearing_term` with that channel's :data:`RecordQuantity` treats
+    it exactly as the bearing voltage (``bearing`` then holds this channel)."""
+    full = sfft.rfftfreq(prep.n_samples, 1.0 / prep.fs)
+    sel = full <= min(f_cut_hz, prep.fs / 2)
+    y, yh = _output_at_h1_rate(np.asarray(y_raw, dtype=float), prep.fs, f_cut_hz, sel,
+                               prep.n_h1)
+    h1 = h1_analysis(prep.terminals_h1, yh, prep.fs_h1, nperseg=prep.h1.nperseg,
+                     noverlap=prep.h1.noverlap, window=prep.h1.window,
+                     input_names=["u_U", "u_V", "u_W"], output_names=[name])
+    return replace(prep, bearing=y, h1=h1)
 
 
 def steady_output(h_bins: ArrC, prep: PreparedRecording, *, for_h1: bool = False) -> ArrF:
@@ -339,6 +386,7 @@ class BearingTerm(RecordTransfer):
     spec: NetSpec
     whiten: ArrC | None = None   # (n_fm, 3, 3) C^{-1/2} of "covariance" weighting, else None
     bias: ArrC | None = None     # (n_fm, 3, 3) input-noise bias I - G_nn G_xx^-1, else None
+    quantity: RecordQuantity = BEARING_QUANTITY   # what ``cout`` measures (u_B unless told)
     _memo: TransferMemo = field(default_factory=TransferMemo, init=False, repr=False,
                                 compare=False)
 
@@ -403,7 +451,8 @@ class BearingTerm(RecordTransfer):
             return r, np.stack(cols, axis=1)
         grid = jacobian_grid(self.prep.bins_hz, _J_TOP * self.freq_hz[-1])
         dy = output_derivatives(self.mna, self.spec, self.state, self.prep, params, names,
-                                grid, self.transfer_bins(params), lmap, self._memo.lowrank)
+                                grid, self.transfer_bins(params), lmap, self._memo.lowrank,
+                                quantity=self.quantity)
         dh1 = self.weigh(self.h1_of(dy))                              # (n_p, n_fm, 3)
         jm = np.concatenate([dh1.real.reshape(len(names), -1),
                              dh1.imag.reshape(len(names), -1)], axis=1).T
@@ -427,8 +476,10 @@ def jacobian_grid(bins_hz: ArrF, top_hz: float, n_log: int = _J_LOG_POINTS) -> A
 def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
                        prep: PreparedRecording, params: ParamSet, names: Sequence[str],
                        grid: ArrF, h_bins: ArrC, lmap: LogMap | None = None,
-                       lowrank: LowRankTransfer | None = None) -> ArrF:
-    """``d y_model / d log p`` (n_names, n_h1): the bearing transfer's derivatives by the
+                       lowrank: LowRankTransfer | None = None,
+                       quantity: RecordQuantity = BEARING_QUANTITY) -> ArrF:
+    """``d y_model / d log p`` (n_names, n_h1): the transfer's derivatives (to ``quantity``,
+    default the bearing voltage; ``h_bins`` must be its transfer) by the
     adjoint method on ``grid`` (Hz), applied to the record's terminal spectra and resampled
     to the H1 rate (the periodic response of :func:`steady_output` is linear in the
     transfer). The relative sensitivity ``dH / H`` is interpolated linearly onto every
@@ -460,8 +511,12 @@ def output_derivatives(mna: MnaSystem, spec: NetSpec, state: BearingState,
         hg, dh = lowrank.with_derivatives(v, k)
         dh = dh[..., pos]
     else:
-        hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [BEARING_NODE], v,
+        hg, dh = mna.response_and_jacobian(grid, list(SOURCES), [n for n, _ in quantity], v,
                                            params=[mna.param_names[e] for e in used])
+        if len(quantity) > 1 or quantity[0][1] != 1.0:   # the weighted sum of the probes
+            w = np.array([wk for _, wk in quantity], dtype=float)
+            hg = np.einsum("fo...,o->f...", hg, w)[:, None]
+            dh = np.einsum("fo...,o->f...", dh, w)[:, None]
     dhx = _chain(dh[:, 0, :, :], v[used], dl[used]).transpose(2, 1, 0)    # (n_p, 3, n_g)
     nb = int(np.searchsorted(prep.bins_hz, grid[-1], side="right"))  # bins to the grid's top
     fb = prep.bins_hz[:nb]
@@ -482,8 +537,12 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
                  min_coherence: float = 0.5,
                  weighting: H1Weighting = "diagonal",
                  input_noise: bool = False, max_input_noise: float = 0.2,
-                 bin_step: int = 1) -> BearingTerm:
+                 bin_step: int = 1,
+                 quantity: RecordQuantity = BEARING_QUANTITY) -> BearingTerm:
     """Condition-2 term of one prepared recording.
+
+    ``quantity``: the network quantity ``prep.h1`` measures (default the bearing voltage
+    ``u_B``; another channel of the record via :func:`prepare_output`).
 
     Bins from ``f_min_hz`` to ``f_max_hz`` where the H1 estimate is valid and the multiple
     coherence is at least ``min_coherence``; ``model_error`` is the relative error floor
@@ -553,8 +612,8 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
                           * np.linalg.inv(h1.gxx[mask]), dtype=complex)
     mna = spec.build(params, state, sources=True).mna
     b = mna.input_matrix(list(SOURCES))
-    cout = mna.output_matrix([BEARING_NODE])
-    return BearingTerm(prep, state, op, hm, sig, mna, b, cout, spec, whiten, bias)
+    cout = quantity_vector(mna, quantity)
+    return BearingTerm(prep, state, op, hm, sig, mna, b, cout, spec, whiten, bias, quantity)
 
 
 def _whitening(h1: H1Result, mask: NDArray[np.bool_], hm: ArrC, eps: float) -> ArrC:

@@ -22,6 +22,14 @@ ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
 
 
+def _magnitude_label(where: str) -> str:
+    """Axis label of a channel's magnitude: H1 transfers of the record channels (V/V; the
+    common-mode current ``i_cm:`` A/V), impedances otherwise."""
+    kind = where.split(":", 1)[0]
+    return {"bearing": "|H1| (V/V)", "bearing_de": "|H1| (V/V)",
+            "i_cm": "|H1| (A/V)"}.get(kind, "|Z| (ohm)")
+
+
 def _safe(where: str) -> str:
     return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in where)
 
@@ -82,7 +90,7 @@ def _channel_figures(c: Channel, d: Diagnosis, r0: ArrC, r1: ArrC, p0: ArrC, p1:
     axs[1].semilogx(f, np.angle(c.measured, deg=True), "k.", ms=3)
     axs[1].semilogx(f, np.angle(p0, deg=True), "-")
     axs[1].semilogx(f, np.angle(p1, deg=True), "--")
-    axs[0].set_ylabel("|H1| (V/V)" if c.where.startswith("bearing:") else "|Z| (ohm)")
+    axs[0].set_ylabel(_magnitude_label(c.where))
     axs[1].set_ylabel("phase (deg)")
     axs[1].set_xlabel("frequency (Hz)")
     axs[0].set_title(f"{c.where}: before/after", fontsize=9)
