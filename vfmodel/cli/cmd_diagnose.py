@@ -34,10 +34,14 @@ def _effects(value: str) -> tuple[str, ...]:
 @click.option("--max-nfev", default=None, type=click.IntRange(5, 1000),
               help="Function evaluations per refit (default: 60 for --model, 30 for the "
               "PMSM model).")
+@click.option("--film-law", "film_law", is_flag=True, default=False,
+              help="The lubricant film follows a power law in speed instead of free values "
+              "per speed (PMSM model; needs >= 2 rotating speeds); diagnosis.json says "
+              "whether the data support the law or free values (BIC).")
 @out_option
 @quiet_option
 def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | None,
-             out_dir: Path,
+             film_law: bool, out_dir: Path,
              quiet: bool) -> None:
     """Fit the starting network to DATASET, locate where it disagrees with the data beyond
     the noise, try every effect it lacks, keep what the data support. Writes
@@ -53,11 +57,14 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | No
     with staged_output(out_dir, owned=DIAGNOSE_OUTPUTS) as stage:
         prog = progress_bar(quiet)
         opts = {} if max_nfev is None else {"max_nfev": max_nfev}
-        res = run_diagnose(dataset, without=eff, model=model, progress=prog, **opts)
+        res = run_diagnose(dataset, without=eff, model=model, film_law=film_law,
+                           progress=prog, **opts)
         prog("figures", 0, 1)
         figs = write_diagnose_figures(res.family, res.diagnosis, stage.dir)
         prog("figures", 1, 1)
         write_diagnose_html(stage.path("report.html"), res.document, figs)
         write_json(stage.path("diagnosis.json"), res.document)
     click.echo(res.document["sentence"])
+    if "film_law" in res.document:
+        click.echo(res.document["film_law"]["sentence"])
     click.echo(f"wrote {out_dir / 'diagnosis.json'}, report.html, {len(figs)} figures")
