@@ -145,9 +145,10 @@ def test_law_jacobian_is_speed_jacobian_times_a(law_family: pmsm.PmsmFamily,
                                                monkeypatch: pytest.MonkeyPatch) -> None:
     """The law's analytic Jacobian equals the free per-speed family's Jacobian at the
     realised values times A (to 1e-12 of its norm: the same numbers, one matrix product),
-    and its law columns (the exponents, a constant) match central differences of the network solved directly (step
-    1e-4 in x; 2 % of the column norm, the tolerance of the free family's test in
-    test_detective_pmsm.py: adjoint sensitivities interpolated over the record bins)."""
+    and its law columns (the exponents, a constant) match central differences of the
+    network solved directly (step 1e-4 in x; 2 % of the column norm, the tolerance of the
+    free family's test in test_detective_pmsm.py: adjoint sensitivities interpolated over
+    the record bins)."""
     fam = law_family
     p = fam.start
     names = fam.free_names((), p)
@@ -199,3 +200,12 @@ def test_free_description_has_the_per_speed_names(law_family: pmsm.PmsmFamily) -
     assert sum("@" in n or "~" in n for n in ln) == 12
     assert {"lubricant.k_d", "lubricant.tau_d"} <= set(ln) - set(fn)
     assert len(fn) - len(ln) == 2
+
+
+def test_film_law_with_a_user_model_is_refused() -> None:
+    """The law is one of the PMSM model's lubricant film: with ``--model`` one message."""
+    from vfmodel.pipeline.diagnose import run_diagnose
+
+    with pytest.raises(InputError, match="--film-law applies to the PMSM model"):
+        run_diagnose(REPO / "data" / "concealed" / "rc_null", film_law=True,
+                     model=REPO / "data" / "user-models" / "rc_ladder.net")

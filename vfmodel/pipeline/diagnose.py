@@ -201,8 +201,9 @@ def film_law_sentence(doc: dict[str, Any]) -> str:
     support)."""
     c = doc["comparison"]
     law = ", ".join(f"{n.split('.')[-1]} ~ speed^{v['exponent']:+.2f}"
-                    + (f" (std {v['exponent_std']:.2g})" if v["exponent_std"] is not None
-                       else "")
+                    + (f" (std {v['exponent_std']:.2g}" if v["exponent_std"] is not None
+                       else " (std -")
+                    + ("" if v["determined"] else ", not determined by the data") + ")"
                     for n, v in doc["power"].items())
     d = c["delta_bic_law_minus_free"]
     which = ("the film law" if c["supported"] == "law"
