@@ -209,3 +209,29 @@ def test_film_law_with_a_user_model_is_refused() -> None:
     with pytest.raises(InputError, match="--film-law applies to the PMSM model"):
         run_diagnose(REPO / "data" / "concealed" / "rc_null", film_law=True,
                      model=REPO / "data" / "user-models" / "rc_ladder.net")
+
+
+def test_sentence_and_report_name_the_supported_description() -> None:
+    """The sentence says which description the data support and flags an exponent whose
+    std exceeds half its bound range; the report shows it under the detective's sentence."""
+    from vfmodel.pipeline.diagnose import film_law_sentence
+    from vfmodel.report.diagnose_html import diagnose_html
+
+    cmp = {"law": {"chi2": 100.0, "k": 4, "bic": 120.0, "chi2_red": 1.0},
+           "free": {"chi2": 99.0, "k": 6, "bic": 129.0, "chi2_red": 1.01},
+           "n_residuals": 104, "delta_bic_law_minus_free": -9.0, "supported": "law",
+           "strength": "weak"}
+    doc = {"n_ref_rpm": 173.2, "comparison": cmp, "power": {
+        "lubricant.C_1": {"exponent": -0.15, "exponent_std": 0.1, "determined": True},
+        "lubricant.R_1": {"exponent": 0.9, "exponent_std": 2.0, "determined": False}}}
+    s = film_law_sentence(doc)
+    assert "support the film law (weak" in s and "Delta BIC -9.0" in s
+    assert "C_1 ~ speed^-0.15 (std 0.1)" in s
+    assert "R_1 ~ speed^+0.90 (std 2, not determined by the data)" in s
+    cmp2 = {**cmp, "supported": "free", "delta_bic_law_minus_free": 30.0,
+            "strength": "very strong"}
+    assert "support free per-speed film values (very strong" in film_law_sentence(
+        {**doc, "comparison": cmp2})
+    html = diagnose_html({"sentence": "S.", "film_law": {"sentence": s}}, [])
+    assert "support the film law" in html
+    assert "support the film law" not in diagnose_html({"sentence": "S."}, [])
