@@ -37,10 +37,14 @@ def _effects(value: str) -> tuple[str, ...]:
 @click.option("--priors", is_flag=True, help="Maximum a posteriori refits with the "
               "physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]; PMSM model).")
+@click.option("--film-law", "film_law", is_flag=True, default=False,
+              help="The lubricant film follows a power law in speed instead of free values "
+              "per speed (PMSM model; needs >= 2 rotating speeds); diagnosis.json says "
+              "whether the data support the law or free values (BIC).")
 @out_option
 @quiet_option
 def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | None,
-             priors: bool, out_dir: Path, quiet: bool) -> None:
+             priors: bool, film_law: bool, out_dir: Path, quiet: bool) -> None:
     """Fit the starting network to DATASET, locate where it disagrees with the data beyond
     the noise, try every effect it lacks, keep what the data support. Writes
     DIR/diagnosis.json, figures (PNG) and DIR/report.html."""
@@ -55,12 +59,14 @@ def diagnose(dataset: Path, without: str, model: Path | None, max_nfev: int | No
     with staged_output(out_dir, owned=DIAGNOSE_OUTPUTS) as stage:
         prog = progress_bar(quiet)
         opts = {} if max_nfev is None else {"max_nfev": max_nfev}
-        res = run_diagnose(dataset, without=eff, model=model, priors=priors, progress=prog,
-                           **opts)
+        res = run_diagnose(dataset, without=eff, model=model, priors=priors,
+                           film_law=film_law, progress=prog, **opts)
         prog("figures", 0, 1)
         figs = write_diagnose_figures(res.family, res.diagnosis, stage.dir)
         prog("figures", 1, 1)
         write_diagnose_html(stage.path("report.html"), res.document, figs)
         write_json(stage.path("diagnosis.json"), res.document)
     click.echo(res.document["sentence"])
+    if "film_law" in res.document:
+        click.echo(res.document["film_law"]["sentence"])
     click.echo(f"wrote {out_dir / 'diagnosis.json'}, report.html, {len(figs)} figures")

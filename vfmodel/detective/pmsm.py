@@ -56,6 +56,7 @@ from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
+from vfmodel.detective.film_law import FilmLaw
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel
 from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
@@ -154,6 +155,9 @@ class PmsmFamily:
     # physical priors of the parameters (maximum a posteriori refits, detective.fit), or
     # None: least squares of the data alone
     priors: Mapping[str, Prior] | None = None
+    # the film law across speeds (--film-law, :mod:`vfmodel.detective.film_law`): its
+    # parameters replace the per-speed copies of the names it governs
+    law: FilmLaw | None = None
 
     # ------------------------------------------------------------------ protocol
     @property
@@ -185,10 +189,19 @@ class PmsmFamily:
         lub = lubricant_names(params, eff)
         if bearing_state(0.0, eff) == "rotating":     # no contact: the film is seen at rest
             names += [n for n in lub if n not in names]
+        per_speed = lub
+        if self.law is not None:
+            names += [n for n in self.law.law_names(lub) if n not in names]
+            per_speed = tuple(n for n in lub if not self.law.governed(n))
         for p in self.preps:
             if p.speed_rpm > 0:
-                names += [n + speed_tag(p.speed_rpm) for n in lub]
+                names += [n + speed_tag(p.speed_rpm) for n in per_speed]
         return tuple(names)
+
+    def free_description(self) -> PmsmFamily:
+        """The same family with free per-speed film values (no law; the compiled terms
+        shared)."""
+        return replace(self, law=None, _names={}, _pools={})
 
     def restart(self, applied: Sequence[Candidate], params: ParamSet) -> ParamSet | None:
         """Start values for the network ``applied`` from the staged identification of that
@@ -205,7 +218,7 @@ class PmsmFamily:
             return None
         got = self._identify(_structure(self.base_effects, applied))
         keep = {n: got[n] for n in got.names if n in params}
-        return params.with_values(keep, clip=True)
+        return params.with_values(keep, clip=True)   # (law: got holds its law start)
 
     def state(self, rpm: float, applied: Sequence[Candidate] = ()) -> BearingState:
         return bearing_state(rpm, _structure(self.base_effects, applied))
@@ -215,7 +228,11 @@ class PmsmFamily:
         if rpm <= 0:
             return params
         tag = speed_tag(rpm)
-        return params.with_values({n: params[n + tag] for n in _LUB_ALL if n + tag in params})
+        vals = {n: params[n + tag] for n in _LUB_ALL if n + tag in params}
+        if self.law is not None:        # the governed values from the law
+            vals.update({n: v for n, v in self.law.values_at(params, rpm).items()
+                         if n + tag in params})
+        return params.with_values(vals, clip=True)
 
     def _terms(self, applied: Sequence[Candidate], params: ParamSet
                ) -> tuple[ImpedanceTerm | None, tuple[BearingTerm, ...]]:
@@ -260,10 +277,16 @@ class PmsmFamily:
 
     def residual_jacobian(self, applied: Sequence[Candidate], params: ParamSet,
                           names: Sequence[str]) -> tuple[ArrF, ArrF]:
-        """Residual and its derivative with respect to ``log`` of ``names`` (analytic)."""
-        r, j = self._residual(applied, params, tuple(names))
+        """Residual and its derivative with respect to ``log`` of ``names`` (analytic);
+        with the film law, ``J_speed @ A`` (:meth:`FilmLaw.expand`)."""
+        if self.law is None:
+            r, j = self._residual(applied, params, tuple(names))
+            assert j is not None
+            return r, j
+        net, a = self.law.expand(names, params)
+        r, j = self._residual(applied, params, net)
         assert j is not None
-        return r, j
+        return r, j @ a
 
     def _residual(self, applied: Sequence[Candidate], params: ParamSet,
                   names: tuple[str, ...] | None) -> tuple[ArrF, ArrF | None]:
@@ -320,6 +343,8 @@ class PmsmFamily:
         jobs = self._jobs(imp, bts)
         for k in jobs[len(jobs) - len(self.records):]:
             self._record_term(applied, params, k)       # compiled here, inherited
+        if names and self.law is not None:      # the network names the law's map reaches
+            names = self.law.expand(names, params)[0]
         if names:
             for k in jobs:
                 self._part_names(applied, params, tuple(names), k)
@@ -516,7 +541,8 @@ def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Prog
 
 def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: int = 101,
                 n_rungs: int = 3, sections: Sequence[int] = (2, 3, 4),
-                priors: bool = False, progress: Progress = no_progress) -> PmsmFamily:
+                priors: bool = False, film_law: bool = False,
+                progress: Progress = no_progress) -> PmsmFamily:
     """Identify the starting network on ``dataset`` and build the family.
 
     ``without``: effects of the paper's model left out of the starting network;
@@ -526,7 +552,11 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     (:func:`vfmodel.greybox.priors.parameter_priors` with the dataset's
     ``[machine]``/``[bearing]``/``[priors]`` tables; a per-speed copy takes the prior at
     its speed, :func:`vfmodel.detective.identifiability.grey_box_priors`); a candidate
-    effect's own parameters stay free (its presence is what the detective tests).
+    effect's own parameters stay free (its presence is what the detective tests), and so
+    do the film law's; ``film_law``:
+    the film follows a law in speed (:mod:`vfmodel.detective.film_law`; needs recordings
+    at two or more rotating speeds, else :class:`InputError`), its start values fitted to
+    the staged identification's per-speed values.
     """
     wo = check_effects(without, "--without")
     bad = wo - PAPER_EFFECTS
@@ -540,6 +570,7 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
                          source=dataset.name)
     base = frozenset(PAPER_EFFECTS - wo)
     recs = sorted(dataset.recordings, key=lambda r: float(r.speed_rpm or 0.0))
+    law = FilmLaw(tuple(float(r.speed_rpm or 0.0) for r in recs)) if film_law else None
     preps = []
     for k, r in enumerate(recs):
         progress("prepare recordings", k, len(recs))
@@ -558,7 +589,10 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
         for sf in ident.speeds:
             if sf.speed_rpm > 0:
                 vals.update({n + speed_tag(sf.speed_rpm): sf.params[n] for n in _LUB_ALL})
-        return st.with_values(vals, clip=True), ident.spec.n_sections
+        st = st.with_values(vals, clip=True)
+        if law is not None:
+            st = law.start(st.with_specs(law.specs(st)))
+        return st, ident.spec.n_sections
 
     start, n_sec = identified(base, sections, progress)
     # detective channels
@@ -578,7 +612,7 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     progress("noise of the spectra", len(topo), len(topo))
     fam = PmsmFamily(dataset.name, base, n_rungs, n_sec, (), dict(spectra),
                      topo, np.asarray(sig, dtype=float), tuple(preps), start,
-                     _identify=lambda eff: identified(eff, (n_sec,))[0])
+                     _identify=lambda eff: identified(eff, (n_sec,))[0], law=law)
     # the bearing channels are those of the starting structure's terms (built once, kept)
     _, bts = fam._terms((), start)
     for p, bt in zip(preps, bts, strict=True):

@@ -216,13 +216,35 @@ def implausible_json(family: Any, d: Diagnosis, dataset: Any) -> dict[str, Any]:
     return out
 
 
+def film_law_sentence(doc: dict[str, Any]) -> str:
+    """The sentence of ``diagnosis.json``'s ``film_law`` (which description the data
+    support)."""
+    c = doc["comparison"]
+    law = ", ".join(f"{n.split('.')[-1]} ~ speed^{v['exponent']:+.2f}"
+                    + (f" (std {v['exponent_std']:.2g}" if v["exponent_std"] is not None
+                       else " (std -")
+                    + ("" if v["determined"] else ", not determined by the data") + ")"
+                    for n, v in doc["power"].items())
+    d = c["delta_bic_law_minus_free"]
+    which = ("the film law" if c["supported"] == "law"
+             else "free per-speed film values")
+    return (f"Film law across speeds ({law}; n_ref {doc['n_ref_rpm']:.4g} rpm): the data "
+            f"support {which} ({c['strength']}: BIC law {c['law']['bic']:.1f} with "
+            f"{c['law']['k']} parameters, free {c['free']['bic']:.1f} with "
+            f"{c['free']['k']}, Delta BIC {d:+.1f}; chi2_red {c['law']['chi2_red']:.3f} "
+            f"vs {c['free']['chi2_red']:.3f}).")
+
+
 def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
                  model: str | Path | None = None, priors: bool = False,
-                 progress: Progress = no_progress, **options: Any) -> DiagnoseResult:
+                 film_law: bool = False, progress: Progress = no_progress,
+                 **options: Any) -> DiagnoseResult:
     """Build the family, run :func:`vfmodel.detective.diagnose.diagnose`, compose JSON.
 
-    ``priors``: maximum a posteriori refits with the physical priors (PMSM model only,
-    :func:`vfmodel.detective.pmsm.pmsm_family`)."""
+    PMSM model only: ``priors``, maximum a posteriori refits with the physical priors
+    (:func:`vfmodel.detective.pmsm.pmsm_family`); ``film_law``, the film follows a law in
+    speed (:mod:`vfmodel.detective.film_law`) and ``diagnosis.json`` gets ``film_law``: the
+    fitted law and its comparison with free per-speed values on the final network (BIC)."""
     without = tuple(without)
     fam: Family
     ds = None
@@ -233,6 +255,9 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
         if priors:
             raise InputError("--priors applies to the PMSM model (its parameters have "
                              "physical priors); a --model network has none", place="--priors")
+        if film_law:
+            raise InputError("--film-law applies to the PMSM model's lubricant film, not "
+                             "to a --model network", place="--film-law")
         from vfmodel.detective.user_model import read_user_model, user_family
 
         fam = user_family(read_user_model(model), dataset, source=str(model))
@@ -241,10 +266,28 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
         from vfmodel.detective.pmsm import pmsm_family
 
         ds = read_dataset(dataset)
-        fam = pmsm_family(ds, without, priors=priors, progress=progress)
+        fam = pmsm_family(ds, without, priors=priors, film_law=film_law, progress=progress)
         options = {**PMSM_OPTIONS, **options}
     d = diagnose(fam, progress=progress, **options)
     doc = diagnosis_json(fam, d)
+    law = getattr(fam, "law", None)
+    if law is not None:
+        from vfmodel.detective.film_law import compare_free, film_law_json
+
+        progress("film law against free per-speed values", 0, 1)
+        fl = film_law_json(law, d.final)
+        fl["comparison"] = compare_free(fam, d.final,
+                                        max_nfev=int(options.get("max_nfev", 30)))
+        fl["sentence"] = film_law_sentence(fl)
+        fl["definition"] = (
+            "the final network fitted with the film law (power laws of lubricant.C_1 "
+            "and lubricant.R_1 in speed about n_ref, one lubricant.k_d and tau_d for every "
+            "speed; the rest per speed) and refitted, warm-started, with free per-speed "
+            "values; BIC = chi2 + k ln m on the same m residuals; supported: the lower BIC "
+            "(very strong: difference > 10); exponent: d ln value / d ln speed, std from "
+            "the Gauss-Newton covariance")
+        doc["film_law"] = fl
+        progress("film law against free per-speed values", 1, 1)
     progress("identifiability and recommendations", 0, 1)
     doc.update(identifiability_json(fam, d, ds))
     if ds is not None:

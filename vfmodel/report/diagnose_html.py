@@ -236,8 +236,11 @@ def diagnose_html(doc: dict[str, Any], figures: Sequence[str],
     key_fig = figure(fig_dir, key_name, f"{key_name}: residuals in units of the noise, "
                      "starting network (top) and after the detective (bottom); shaded: "
                      "mismatch beyond the noise (click to zoom)") if key_name else ""
-    head = summary(f"Discrepancy detective: {doc.get('model', '')}",
-                   f"<b>{E(str(doc.get('sentence', '')))}</b>", checks, look, key_fig,
+    lead = f"<b>{E(str(doc.get('sentence', '')))}</b>"
+    if "film_law" in doc:       # --film-law: which description of the film the data support
+        lead += f"<br>{E(str(doc['film_law'].get('sentence', '')))}"
+    head = summary(f"Discrepancy detective: {doc.get('model', '')}", lead, checks, look,
+                   key_fig,
                    reference_name="reference")
     body = [head, _mismatches(doc), _findings(doc), _windows(doc), _identifiability(doc),
             _implausible(doc), _rejected(doc), "<h2>Figures</h2><div class='figs'>"
