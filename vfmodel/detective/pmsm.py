@@ -58,7 +58,7 @@ from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.film_law import FilmLaw
 from vfmodel.detective.noise import spectrum_noise
-from vfmodel.detective.problem import Candidate, Channel
+from vfmodel.detective.problem import Candidate, Channel, split_channels
 from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
 from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names
 from vfmodel.errors import InputError
@@ -395,8 +395,6 @@ class PmsmFamily:
             rt = self.records[k - len(bts)]
             r3, j3 = rt.residual(self, applied, params, names)
             return r3, j3, rt.term(self, applied, params)._memo.entry()
-        rs: list[ArrF] = []
-        js: list[ArrF] = []
         if k < 0:
             assert imp is not None
             loc, cols = self._part_names(applied, params, nn, k) if jac else ([], [])
@@ -408,15 +406,9 @@ class PmsmFamily:
                 assert jm is not None
             else:
                 r, jm = imp.residual(params)[0], np.zeros((2 * nf * nt, 0))
-            scale = imp.sigma / self.imp_sigma                      # term sigma -> detective
-            rr = r.reshape(2, nf, nt) * scale
-            jj = jm.reshape(2, nf, nt, len(loc)) * scale[None, None, :, None]
-            for t in range(nt):
-                rs.append(rr[:, :, t].ravel())
-                if jac:
-                    full = np.zeros((2 * nf, len(nn)))
-                    full[:, cols] = jj[:, :, t, :].reshape(2 * nf, len(loc))
-                    js.append(full)
+            scale = np.tile(imp.sigma / self.imp_sigma, 2 * nf)    # term sigma -> detective
+            rs, js = split_channels(r * scale, jm * scale[:, None] if jac else None, nf, nt,
+                                    cols, len(nn))
             return rs, js, None
         bt, p = bts[k], self.preps[k]
         ps = self.at_speed(params, p.speed_rpm)
@@ -427,15 +419,7 @@ class PmsmFamily:
         else:
             r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
         # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
-        nfm = bt.h_meas.shape[0]
-        rr = r.reshape(2, nfm, 3)
-        jj = jm.reshape(2, nfm, 3, len(loc))
-        for i in range(3):
-            rs.append(rr[:, :, i].ravel())
-            if jac:
-                full = np.zeros((2 * nfm, len(nn)))
-                full[:, cols] = jj[:, :, i, :].reshape(2 * nfm, len(loc))
-                js.append(full)
+        rs, js = split_channels(r, jm if jac else None, bt.h_meas.shape[0], 3, cols, len(nn))
         return rs, js, bt._memo.entry()
 
     def poles(self, applied: Sequence[Candidate], params: ParamSet) -> ArrC:

@@ -23,7 +23,8 @@ from numpy.typing import NDArray
 
 from vfmodel.greybox.params import ParamSet, ParamSpec
 
-__all__ = ["Candidate", "Channel", "Family", "channel_slices", "log_residual"]
+__all__ = ["Candidate", "Channel", "Family", "channel_slices", "log_residual",
+           "split_channels"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
@@ -131,3 +132,22 @@ def log_residual(channels: Sequence[Channel], predicted: Sequence[ArrC]) -> ArrF
         im = np.angle(np.exp(1j * lr.imag * c.sigma)) / c.sigma
         parts += [lr.real, im]
     return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def split_channels(r: ArrF, jm: ArrF | None, n_f: int, n_c: int, cols: Sequence[int],
+                   n_names: int) -> tuple[list[ArrF], list[ArrF]]:
+    """A term's residual in the layout ``[Re (f, c), Im (f, c)]`` (``n_f`` points, ``n_c``
+    channels) split into one residual ``[Re, Im]`` per channel (the layout above), and its
+    Jacobian ``jm`` (columns: the term's local names) into per-channel blocks over all
+    ``n_names`` fitted names, the local ones at ``cols`` (``jm`` None: no blocks)."""
+    rr = r.reshape(2, n_f, n_c)
+    rs = [rr[:, :, c].ravel() for c in range(n_c)]
+    if jm is None:
+        return rs, []
+    jj = jm.reshape(2, n_f, n_c, len(cols))
+    js = []
+    for c in range(n_c):
+        full = np.zeros((2 * n_f, n_names))
+        full[:, cols] = jj[:, :, c, :].reshape(2 * n_f, len(cols))
+        js.append(full)
+    return rs, js

@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState
 from vfmodel.core.recording import BEARING_DE, COMMON_MODE_CURRENT, Recording
-from vfmodel.detective.problem import Channel
+from vfmodel.detective.problem import Channel, split_channels
 from vfmodel.detective.shaft_frame import local_names
 from vfmodel.greybox.assembly import PHASES
 from vfmodel.greybox.network import NetSpec
@@ -131,17 +131,8 @@ class RecordChannelTerm:
             assert jm is not None
         else:
             r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
-        nfm = bt.h_meas.shape[0]
-        rr = r.reshape(2, nfm, 3)
-        jj = jm.reshape(2, nfm, 3, len(loc))
-        rs, js = [], []
-        for i in range(3):
-            rs.append(rr[:, :, i].ravel())
-            if names is not None:
-                full = np.zeros((2 * nfm, len(nn)))
-                full[:, cols] = jj[:, :, i, :].reshape(2 * nfm, len(loc))
-                js.append(full)
-        return rs, js
+        return split_channels(r, jm if names is not None else None, bt.h_meas.shape[0], 3,
+                              cols, len(nn))
 
 
 def record_terms(recordings: Sequence[Recording], preps: Sequence[PreparedRecording],
