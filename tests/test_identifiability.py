@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 
 from vfmodel.detective.fit import FitResult
 from vfmodel.detective.identifiability import (
@@ -191,3 +192,35 @@ def test_report_names_the_first_decisive_measurement() -> None:
     assert "Identifiability of the effects" in html and "Recommended measurements" in html
     assert "1 identifiable, 1 only through their prior, 0 not identifiable" in html
     assert "measure <b>impedance:Shaft-Frame</b> at 300" in html
+
+
+def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.MonkeyPatch
+                                                          ) -> None:
+    """Linear reference: the measurement's difference ``dm`` (Re part, sigma 0.01) against
+    a network whose only free parameter moves it along ``g``. Along ``dm`` itself and
+    without a prior the refit absorbs it all (0); orthogonal to it nothing (the fixed-value
+    separation); with a prior of std s on the parameter, a difference c g costs
+    ``c^2 |g|^2 / (1 + s^2 |g|^2)`` (ridge regression on one column, by hand)."""
+    import vfmodel.detective.recommend as rc
+
+    freq = np.geomspace(1e3, 1e6, 8)
+    dm = 0.01 * np.linspace(1.0, 2.0, freq.size)               # ln(Z_a / Z_b), real
+    ortho = np.where(np.arange(freq.size) % 2 == 0, 1.0, -1.0) * 1e-3
+    ortho -= dm * (ortho @ dm) / (dm @ dm)
+    monkeypatch.setattr(rc, "_shaft_frame", lambda fam, net, rpm, f: np.exp(
+        dm if net == "a" else 0.0) * np.ones(f.size, complex))
+    sig = 0.01
+
+    def sep(direction: np.ndarray, prior_s: float | None) -> float:
+        monkeypatch.setattr(rc, "_dlnz_dlnp",
+                            lambda fam, net, names, rpm, f: direction[:, None] + 0j)
+        row = np.zeros((1, 1)) if prior_s is None else np.full((1, 1), 1.0 / prior_s)
+        present = rc._Refit(("p",), row, np.zeros(1), 0.0)
+        return rc.refit_separation(None, "a", "b", 0.0, freq, sig, present)  # type: ignore
+
+    full = rc.separation(dm + 0j, sig)
+    assert sep(dm, None) == pytest.approx(0.0, abs=1e-9 * full)
+    assert sep(ortho, None) == pytest.approx(full, rel=1e-9)
+    s = 0.5
+    g2 = float(dm @ dm) / sig**2
+    assert sep(dm, s) == pytest.approx(g2 / (1 + s**2 * g2), rel=1e-9)

@@ -176,7 +176,9 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
     cov = a.parameters.cov_post
     recs = recommend(family, comparisons(d, status, und, priors),
                      have=_have(dataset) if dataset is not None else (),
-                     network=(d.final, cov) if cov is not None else None)
+                     network=(d.final, cov) if cov is not None else None,
+                     prior_sigma={n: p.sigma for n, p in priors.items()}
+                     if dataset is not None else None)
     return {"identifiability": a.as_json(),
             "recommendations": [r.as_json() for r in recs],
             "recommendations_definition": (
@@ -193,6 +195,11 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "network_spread_delta_chi2: expected chi2 of the measurement from the final "
                 "network's own uncertainty (covariance of ln p from data and prior), i.e. "
                 "what it would teach the network whatever the effect (Shaft-Frame only); "
+                "expected_delta_chi2_after_refit (Shaft-Frame only): what the network "
+                "without the effect, refitted (linearised, held by the physical priors) to "
+                "the network with it on the present data and the measurement, still misses "
+                "on top of what it misses without the measurement; where given, decisive "
+                "and the ranking use it; "
                 "null: not finite or not computed")}
 
 
