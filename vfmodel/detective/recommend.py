@@ -143,12 +143,18 @@ class Recommendation:
     prior_names: tuple[str, ...] = ()
     network_spread: float | None = None
     after_refit: float | None = None
+    after_refit_at_prior: float | None = None
 
     @property
     def rank_value(self) -> float:
-        """What the list is ranked by: the separation left after the refit where it is
-        computed (shaft-to-frame), else the separation at fixed values."""
-        return self.expected_delta_chi2 if self.after_refit is None else self.after_refit
+        """What the list is ranked by: where the separation after the refit is computed
+        (shaft-to-frame) the larger of it at the fitted size and at the prior's size of
+        the effect's undetermined parameters (the data leave the size open, so the
+        measurement is worth making when it would tell a typical-size effect), else the
+        separation at fixed values."""
+        if self.after_refit is None:
+            return self.expected_delta_chi2
+        return max(self.after_refit, self.after_refit_at_prior or 0.0)
 
     def as_json(self) -> dict[str, Any]:
         def f(x: float | None) -> float | None:
@@ -162,7 +168,8 @@ class Recommendation:
                 "data_delta_chi2_at_prior": f(self.data_at_prior),
                 "prior_median_for": list(self.prior_names),
                 "network_spread_delta_chi2": f(self.network_spread),
-                "expected_delta_chi2_after_refit": f(self.after_refit)}
+                "expected_delta_chi2_after_refit": f(self.after_refit),
+                "expected_delta_chi2_after_refit_at_prior": f(self.after_refit_at_prior)}
 
 
 def _shaft_frame(family: Any, fit: Net, rpm: float, freq: ArrF) -> ArrC:
@@ -238,8 +245,8 @@ def _miss(jac: ArrF, d: ArrF) -> float:
 
 @dataclass
 class _Refit:
-    """The linearised refit of the network without the effect (``b``) towards the one with
-    it (``a``) on the present data (see :func:`refit_separation`): the Jacobian of ``b``'s
+    """The linearised refit of the network without the effect (``b``) towards one with it
+    (``a``) on the present data (see :func:`refit_separation`): the Jacobian of ``b``'s
     residual with the prior rows below, the residual difference ``r_a - r_b`` with zeros
     below, and what that refit misses without a further measurement."""
 
@@ -249,17 +256,21 @@ class _Refit:
     base: float
 
 
-def _present_refit(family: Any, a: Net, b: Net, prior_sigma: Mapping[str, float]
-                   ) -> _Refit:
+def _present_refits(family: Any, nets: Sequence[Net], b: Net,
+                    prior_sigma: Mapping[str, float]) -> list[_Refit]:
+    """:class:`_Refit` of ``b`` towards each of ``nets`` (one Jacobian of ``b``)."""
     from vfmodel.detective.identifiability import jacobian
 
     names = tuple(family.free_names(b.applied, b.params))
     s = np.array([prior_sigma.get(n, math.inf) for n in names], dtype=float)
     pr = np.diag(np.where(np.isfinite(s), 1.0 / s, 0.0))
     jac = np.vstack([jacobian(family, b.applied, b.params, names), pr])
-    d = np.concatenate([evaluate(family, a.applied, a.params)
-                        - evaluate(family, b.applied, b.params), np.zeros(len(names))])
-    return _Refit(names, jac, d, _miss(jac, d))
+    rb = evaluate(family, b.applied, b.params)
+    out = []
+    for a in nets:
+        d = np.concatenate([evaluate(family, a.applied, a.params) - rb, np.zeros(len(names))])
+        out.append(_Refit(names, jac, d, _miss(jac, d)))
+    return out
 
 
 def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
@@ -269,7 +280,7 @@ def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma:
     to noise-free data of ``a`` (the network with it) on the present data and the
     measurement, each parameter also held by its physical prior (a parameter without one
     moves freely), misses by this much more than the same refit on the present data alone
-    (``present``, :func:`_present_refit`). An effect that the network's other parameters
+    (``present``, :func:`_present_refits`). An effect that the network's other parameters
     can mimic on that path (a Foster-equivalent one-port, e.g. an edge capacitance beside
     a free film) separates by ``expected_delta_chi2`` at fixed values but by little here.
     Linearised at ``b``: for large differences it is an estimate, not a bound."""
@@ -361,15 +372,16 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
             r0 = evaluate(family, cmp.with_.applied, cmp.with_.params)
             data_prior = float(r @ r - r0 @ r0)
         best: dict[str, Recommendation] = {}
-        present: _Refit | None = None
+        present: list[_Refit] = []
+        nets = [cmp.with_] + ([cmp.with_prior] if cmp.with_prior is not None else [])
         for (meas, rpm), (d, n, m, noise) in fitted.items():
-            after = None
+            after: list[float | None] = [None, None]
             if prior_sigma is not None and meas == "impedance:Shaft-Frame":
-                if present is None:
-                    present = _present_refit(family, cmp.with_, cmp.without, prior_sigma)
-                after = refit_separation(family, cmp.with_, cmp.without, rpm, freq, sig,
-                                         present)
-            value = d if after is None else after
+                if not present:
+                    present = _present_refits(family, nets, cmp.without, prior_sigma)
+                for i, (a, pr) in enumerate(zip(nets, present, strict=True)):
+                    after[i] = refit_separation(family, a, cmp.without, rpm, freq, sig, pr)
+            value = d if after[0] is None else max(after[0], after[1] or 0.0)
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
@@ -382,7 +394,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                 ns = spread[rpm]
             best[meas] = Recommendation(meas, rpm, cmp.separates, d,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
-                                        data_prior, cmp.prior_names, ns, after)
+                                        data_prior, cmp.prior_names, ns, after[0], after[1])
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
 

@@ -198,8 +198,9 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "expected_delta_chi2_after_refit (Shaft-Frame only): what the network "
                 "without the effect, refitted (linearised, held by the physical priors) to "
                 "the network with it on the present data and the measurement, still misses "
-                "on top of what it misses without the measurement; where given, decisive "
-                "and the ranking use it; "
+                "on top of what it misses without the measurement (_at_prior: towards the "
+                "network with the effect's undetermined parameters at their prior median); "
+                "where given, decisive and the ranking use the larger of the two; "
                 "null: not finite or not computed")}
 
 
