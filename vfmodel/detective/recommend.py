@@ -144,17 +144,20 @@ class Recommendation:
     network_spread: float | None = None
     after_refit: float | None = None
     after_refit_at_prior: float | None = None
+    prior_size_open: bool = False
 
     @property
     def rank_value(self) -> float:
         """What the list is ranked by: where the separation after the refit is computed
-        (shaft-to-frame) the larger of it at the fitted size and at the prior's size of
-        the effect's undetermined parameters (the data leave the size open, so the
-        measurement is worth making when it would tell a typical-size effect), else the
-        separation at fixed values."""
+        (shaft-to-frame) the larger of it at the fitted size and, when the present data
+        cannot exclude it (``prior_size_open``), at the prior's size of the effect's
+        undetermined parameters (the data leave the size open, so the measurement is worth
+        making when it would tell a typical-size effect); else the separation at fixed
+        values."""
         if self.after_refit is None:
             return self.expected_delta_chi2
-        return max(self.after_refit, self.after_refit_at_prior or 0.0)
+        typical = self.after_refit_at_prior if self.prior_size_open else None
+        return max(self.after_refit, typical or 0.0)
 
     def as_json(self) -> dict[str, Any]:
         def f(x: float | None) -> float | None:
@@ -169,7 +172,8 @@ class Recommendation:
                 "prior_median_for": list(self.prior_names),
                 "network_spread_delta_chi2": f(self.network_spread),
                 "expected_delta_chi2_after_refit": f(self.after_refit),
-                "expected_delta_chi2_after_refit_at_prior": f(self.after_refit_at_prior)}
+                "expected_delta_chi2_after_refit_at_prior": f(self.after_refit_at_prior),
+                "prior_size_open": self.prior_size_open}
 
 
 def _shaft_frame(family: Any, fit: Net, rpm: float, freq: ArrF) -> ArrC:
@@ -381,7 +385,13 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                     present = _present_refits(family, nets, cmp.without, prior_sigma)
                 for i, (a, pr) in enumerate(zip(nets, present, strict=True)):
                     after[i] = refit_separation(family, a, cmp.without, rpm, freq, sig, pr)
-            value = d if after[0] is None else max(after[0], after[1] or 0.0)
+            # a typical-size effect counts only where the refit on the present data can
+            # absorb it (else those data already exclude that size: on pmsm_edge the
+            # fixture inductance at its prior size, which the Shaft-Frame path does not
+            # see at all, "separated" by pinning what the spectra's refit had used)
+            open_ = len(present) > 1 and not _decisive(
+                present[1].base, cmp.n_params, present[1].d.size - len(present[1].names))
+            value = d if after[0] is None else max(after[0], (after[1] or 0.0) * open_)
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
@@ -394,7 +404,8 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                 ns = spread[rpm]
             best[meas] = Recommendation(meas, rpm, cmp.separates, d,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
-                                        data_prior, cmp.prior_names, ns, after[0], after[1])
+                                        data_prior, cmp.prior_names, ns, after[0], after[1],
+                                        bool(open_))
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
 

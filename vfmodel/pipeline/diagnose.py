@@ -200,7 +200,9 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "the network with it on the present data and the measurement, still misses "
                 "on top of what it misses without the measurement (_at_prior: towards the "
                 "network with the effect's undetermined parameters at their prior median); "
-                "where given, decisive and the ranking use the larger of the two; "
+                "where given, decisive and the ranking use the larger of the two, the "
+                "latter only when the refit absorbs that size on the present data "
+                "(prior_size_open); "
                 "null: not finite or not computed")}
 
 
