@@ -125,3 +125,16 @@ def test_a_large_film_at_speed_points_at_the_bearing_capacitances_not_the_contac
 def test_values_within_three_sigma_are_not_evidence() -> None:
     c1 = PRI["lubricant.C_1"]
     assert _ev({"lubricant.C_1": c1.median * c1.gsd**2.9}) == []
+
+
+def test_priors_with_a_user_model_are_refused() -> None:
+    """A ``--model`` network has no physical priors: one message naming the option."""
+    from pathlib import Path
+
+    from vfmodel.errors import InputError
+    from vfmodel.pipeline.diagnose import run_diagnose
+
+    repo = Path(__file__).resolve().parents[1]
+    with pytest.raises(InputError, match="--priors: applies to the PMSM model only"):
+        run_diagnose(repo / "data" / "concealed" / "rc_null", priors=True,
+                     model=repo / "data" / "user-models" / "rc_ladder.net")

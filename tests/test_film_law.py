@@ -206,7 +206,7 @@ def test_film_law_with_a_user_model_is_refused() -> None:
     """The law is one of the PMSM model's lubricant film: with ``--model`` one message."""
     from vfmodel.pipeline.diagnose import run_diagnose
 
-    with pytest.raises(InputError, match="--film-law applies to the PMSM model"):
+    with pytest.raises(InputError, match="--film-law: applies to the PMSM model"):
         run_diagnose(REPO / "data" / "concealed" / "rc_null", film_law=True,
                      model=REPO / "data" / "user-models" / "rc_ladder.net")
 

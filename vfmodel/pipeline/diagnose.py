@@ -263,11 +263,11 @@ def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
             raise InputError("--without applies to the PMSM model; with --model the candidate "
                              "changes are the model's .effect lines", place="--without")
         if priors:
-            raise InputError("--priors applies to the PMSM model (its parameters have "
-                             "physical priors); a --model network has none", place="--priors")
+            raise InputError("applies to the PMSM model only (its parameters have physical "
+                             "priors); a --model network has none", place="--priors")
         if film_law:
-            raise InputError("--film-law applies to the PMSM model's lubricant film, not "
-                             "to a --model network", place="--film-law")
+            raise InputError("applies to the PMSM model's lubricant film, not to a --model "
+                             "network", place="--film-law")
         from vfmodel.detective.user_model import read_user_model, user_family
 
         fam = user_family(read_user_model(model), dataset, source=str(model))
