@@ -18,13 +18,13 @@ where a metallic contact would short it).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from vfmodel.greybox.priors import Prior, flag_implausible
 
-__all__ = ["EXPLAINS", "N_SIGMA", "Explanation", "effects_named", "implausible_evidence"]
+__all__ = ["EXPLAINS", "N_SIGMA", "Explanation", "implausible_evidence"]
 
 N_SIGMA = 3.0
 """Excursion (geometric sigmas of the prior) from which a value counts as implausible."""
@@ -115,12 +115,3 @@ def implausible_evidence(values: Mapping[str, float], priors: Mapping[str, Prior
                                                          rejected)} for e in expl]})
     return out
 
-
-def effects_named(evidence: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The effects the evidence points at, each once, in order of the largest excursion."""
-    seen: list[str] = []
-    for item in evidence:
-        for e in item["explained_by"]:
-            if e["effect"] not in seen:
-                seen.append(e["effect"])
-    return seen

@@ -63,6 +63,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from vfmodel.detective.shaft_frame import speed_tag
 from vfmodel.errors import InputError
 from vfmodel.greybox.params import ParamSet, ParamSpec
 
@@ -78,11 +79,6 @@ POWER: dict[str, tuple[float, float, float]] = {
 
 CONSTANT = ("lubricant.k_d", "lubricant.tau_d")
 """Parameters with one value at every speed (the base name)."""
-
-
-def speed_tag(rpm: float) -> str:
-    """Suffix of the per-speed parameter copies (``@100rpm``)."""
-    return f"@{rpm:g}rpm"
 
 
 def ref_name(name: str) -> str:

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from vfmodel.detective.problem import Candidate, Family, log_residual
 from vfmodel.greybox.lsq import fit_log, log_covariance, log_start
 from vfmodel.greybox.params import ParamSet
-from vfmodel.greybox.priors import prior_residuals
+from vfmodel.greybox.priors import prior_rows
 
 __all__ = ["FitResult", "evaluate", "refit"]
 
@@ -197,21 +197,9 @@ def refit(family: Family, applied: Sequence[Candidate], params: ParamSet,
 
 def _prior_rows(family: Family, names: Sequence[str]
                 ) -> Callable[[ArrF], tuple[ArrF, ArrF]]:
-    """Whitened prior residuals of the fitted ``x = ln p`` and their Jacobian rows
-    (:func:`vfmodel.greybox.priors.prior_residuals`) for the names that have a prior in
-    the family's ``priors`` (a mapping name -> :class:`~vfmodel.greybox.priors.Prior`,
-    optional); stacked below the data residuals they make the fit maximum a posteriori
-    and its Gauss-Newton covariance the posterior one. No ``priors``: no rows."""
+    """:func:`vfmodel.greybox.priors.prior_rows` of the family's ``priors`` (a mapping name
+    -> :class:`~vfmodel.greybox.priors.Prior`, optional; none: no rows): stacked below the
+    data residuals they make the fit maximum a posteriori and its Gauss-Newton covariance
+    the posterior one."""
     pri = getattr(family, "priors", None) or {}
-    idx = np.array([i for i, n in enumerate(names) if n in pri], dtype=int)
-    sub = [names[i] for i in idx]
-
-    def rows(x: ArrF) -> tuple[ArrF, ArrF]:
-        jm = np.zeros((idx.size, x.size))
-        if not idx.size:
-            return np.zeros(0), jm
-        r, dr = prior_residuals(x[idx], sub, pri)
-        jm[np.arange(idx.size), idx] = dr
-        return r, jm
-
-    return rows
+    return lambda x: prior_rows(x, names, pri)

@@ -60,7 +60,7 @@ from vfmodel.detective.film_law import FilmLaw
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel, split_channels
 from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
-from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names
+from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names, speed_tag
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
 from vfmodel.greybox.effects import (
@@ -114,11 +114,6 @@ _STARTS: dict[str, tuple[str, tuple[float, ...]]] = {
     "fixture_inductance": ("fixture.L", (1e-9, 1e-8, 1e-7)),
     "endwinding_capacitance": ("winding.C_pp", (3e-12, 2e-11, 1e-10)),
 }
-
-
-def speed_tag(rpm: float) -> str:
-    """Suffix of the per-speed parameter copies (``@100rpm``)."""
-    return f"@{rpm:g}rpm"
 
 
 def _structure(base: frozenset[str], applied: Sequence[Candidate]) -> frozenset[str]:
@@ -517,7 +512,7 @@ def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Prog
         full = fd.to_kind("Z")
         nz = spectrum_noise(full.freq_hz, full.values[:, 0, 0])
         thin = thin_spectra({SHAFT_FRAME: full}, fit_points)[SHAFT_FRAME]
-        where = f"impedance:{SHAFT_FRAME}" + (f"@{rpm:g}rpm" if rpm > 0 else "")
+        where = f"impedance:{SHAFT_FRAME}" + (speed_tag(rpm) if rpm > 0 else "")
         out.append((PortTerm(where, rpm, thin.freq_hz, thin.values[:, 0, 0], nz.sigma),
                     nz.method, None if nz.blackbox is None else nz.blackbox.poles))
     return out

@@ -25,12 +25,17 @@ from vfmodel.circuit.mna import MnaSystem
 from vfmodel.greybox.assembly import BEARING_NODE
 from vfmodel.greybox.params import ParamSet
 
-__all__ = ["SHAFT_FRAME", "PortTerm", "local_names"]
+__all__ = ["SHAFT_FRAME", "PortTerm", "local_names", "speed_tag"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
 
 SHAFT_FRAME = "Shaft-Frame"
+
+
+def speed_tag(rpm: float) -> str:
+    """Suffix of the PMSM detective's per-speed parameter copies (``@100rpm``)."""
+    return f"@{rpm:g}rpm"
 
 
 def local_names(names: Sequence[str], rpm: float, params: ParamSet
@@ -39,7 +44,7 @@ def local_names(names: Sequence[str], rpm: float, params: ParamSet
     at a rotating speed the copies ``<name>@<rpm>rpm`` (as ``<name>``); a base value whose
     copy at ``rpm`` exists in ``params`` is replaced by it there (``PmsmFamily.at_speed``)
     and does not act, fitted or not; copies of other speeds do not act."""
-    tag = f"@{rpm:g}rpm"
+    tag = speed_tag(rpm)
     loc, cols = [], []
     for j, n in enumerate(names):
         if "@" not in n:

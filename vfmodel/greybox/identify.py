@@ -98,7 +98,7 @@ from vfmodel.greybox.objective import (
     prepare_recording,
 )
 from vfmodel.greybox.params import ParamSet
-from vfmodel.greybox.priors import Prior, parameter_priors, prior_residuals
+from vfmodel.greybox.priors import Prior, parameter_priors, prior_rows
 from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
@@ -284,18 +284,14 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
     names = tuple(names)
     x0, lo, hi = log_start(params, names)
     phys = np.array([n in (priors or {}) for n in names], dtype=bool)
-    pnames = [n for n, b in zip(names, phys, strict=True) if b]
     weak = ~phys if prior_sigma > 0 else np.zeros(len(names), dtype=bool)
 
-    def prior_rows(x: ArrF) -> tuple[list[ArrF], list[ArrF]]:
+    def stage_prior(x: ArrF) -> tuple[list[ArrF], list[ArrF]]:
         """Residuals and Jacobian rows of the physical priors and of the weak prior
         towards the start (the names without a physical prior)."""
         rs, js = [], []
-        if pnames:
-            assert priors is not None
-            r, dr = prior_residuals(x[phys], pnames, priors)
-            jm = np.zeros((r.size, x.size))
-            jm[np.arange(r.size), np.flatnonzero(phys)] = dr
+        if phys.any():
+            r, jm = prior_rows(x, names, priors or {})
             rs.append(r)
             js.append(jm)
         if weak.any():
@@ -324,7 +320,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
             p = params.from_log(x, names)
             rs = [wgt * r for (r, _), (_, wgt) in zip(pool.map((p, False)), terms,
                                                       strict=True)]
-            rs += prior_rows(x)[0]
+            rs += stage_prior(x)[0]
             rcache.clear()
             rcache[key] = np.concatenate(rs)
             count[0] += 1
@@ -343,7 +339,7 @@ def fit_stage(terms: Sequence[tuple[Term, float]], params: ParamSet, names: Sequ
             for (_, j), (_, wgt) in zip(pool.map((p, True)), terms, strict=True):
                 assert j is not None
                 js.append(wgt * j)
-            js += prior_rows(x)[1]
+            js += stage_prior(x)[1]
             jcache.clear()
             jcache[key] = np.concatenate(js)
         return jcache[key]

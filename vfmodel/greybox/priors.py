@@ -110,6 +110,7 @@ __all__ = [
     "neg_log_prior",
     "parameter_priors",
     "prior_residuals",
+    "prior_rows",
 ]
 
 ArrF = NDArray[np.float64]
@@ -410,6 +411,21 @@ def prior_residuals(x_log: ArrayLike, names: Sequence[str], priors: Mapping[str,
         elif x[i] > math.log(p.upper):
             r[i], dr[i] = (x[i] - math.log(p.upper)) / s, 1.0 / s
     return r, dr
+
+
+def prior_rows(x_log: ArrayLike, names: Sequence[str], priors: Mapping[str, Prior]
+               ) -> tuple[ArrF, ArrF]:
+    """The rows a maximum a posteriori fit of ``x = ln p`` (over ``names``) stacks below its
+    data residuals: :func:`prior_residuals` of the names that have a prior in ``priors``
+    (in their order; the others give no row) and their Jacobian ``(rows, len(names))``."""
+    x = np.asarray(x_log, dtype=float).ravel()
+    idx = np.array([i for i, n in enumerate(names) if n in priors], dtype=int)
+    jm = np.zeros((idx.size, x.size))
+    if not idx.size:
+        return np.zeros(0), jm
+    r, dr = prior_residuals(x[idx], [names[i] for i in idx], priors)
+    jm[np.arange(idx.size), idx] = dr
+    return r, jm
 
 
 def neg_log_prior(values: Mapping[str, float] | ParamSet, priors: Mapping[str, Prior]

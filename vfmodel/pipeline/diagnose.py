@@ -219,10 +219,11 @@ def implausible_json(family: Any, d: Diagnosis, dataset: Any) -> dict[str, Any]:
                            "sigmas of their physical prior from its median "
                            "(vfmodel.greybox.priors), each with the effects of the "
                            "vocabulary that explain such a value and their outcome"}
+    priors = grey_box_priors(sorted({*d.start.names, *d.final.names}), dataset)
     for key, fit in (("start", d.start), ("final", d.final)):
         vals = {n: fit.params[n] for n in fit.names}
-        out[key] = implausible_evidence(vals, grey_box_priors(sorted(vals), dataset),
-                                        family.spec(fit.applied).effects, found, rejected)
+        out[key] = implausible_evidence(vals, priors, family.spec(fit.applied).effects,
+                                        found, rejected)
     return out
 
 
