@@ -310,3 +310,28 @@ def test_lubricant_stage_recovers_film_from_periodic_record() -> None:
     c1 = 15e-9 * (1 + truth["lubricant.k_d"])
     assert film_equivalent(fit, spec.effects)["c_f"] == pytest.approx(
         c1 * 80e-9 / (c1 + 80e-9), rel=0.02)
+
+
+@pytest.mark.parametrize("channel", ["u_B", "u_B_DE"])
+def test_a_flat_recorded_channel_is_refused_with_its_name(channel: str) -> None:
+    # a disconnected probe records zeros: its H1 has no power to whiten by (the detective
+    # ended in "Residuals are not finite" on such a u_B_DE); one InputError naming it
+    from vfmodel.greybox.objective import RECORD_QUANTITIES, prepare_output
+
+    rng = np.random.default_rng(0)
+    fs, n = 100e6, 2**14
+    x = rng.standard_normal((3, n))
+    y = rng.standard_normal(n)
+    names = ("u_U", "u_V", "u_W", "u_B", "u_B_DE")
+    flat = np.zeros(n)
+    rows = [x, (flat if channel == "u_B" else y)[None], (flat if channel == "u_B_DE" else y)[None]]
+    rec = Recording(fs, np.vstack(rows), names, 300.0)
+    with pytest.raises(InputError, match=f"{channel} of the recording at 300 rpm"):
+        prep = prepare_recording(rec, nperseg=2048)
+        prepare_output(prep, flat, "u_B_DE")
+    prep = prepare_recording(Recording(fs, np.vstack([x, y[None], y[None]]), names, 300.0),
+                             nperseg=2048)
+    # a measured channel of the same record passes
+    good = prepare_output(prep, y, channel) if channel == "u_B_DE" else prep
+    assert bearing_term(good, NetSpec(), P0, "rotating",
+                        quantity=RECORD_QUANTITIES[channel]).n_residuals > 0

@@ -556,6 +556,9 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
         preps.append(prepare_recording(r))
     progress("prepare recordings", len(recs), len(recs))
     prepared = {p.speed_rpm: p for p in preps}
+    # the further record channels (u_B_DE, i_CM) prepared before the identification: a
+    # flat channel is refused before minutes of work
+    records = record_terms(recs, preps, _bearing_term)
 
     def identified(effects: frozenset[str], secs: Sequence[int],
                    prog: Progress = no_progress) -> tuple[ParamSet, int]:
@@ -603,7 +606,6 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
     chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
               for t, m, bb in ports]
-    records = record_terms(recs, preps, _bearing_term)
     for k, rt in enumerate(records):
         progress("further record channels", k, len(records))
         chans += rt.channels(fam, start)

@@ -143,5 +143,6 @@ def record_terms(recordings: Sequence[Recording], preps: Sequence[PreparedRecord
     out = []
     for rec, prep in zip(recordings, preps, strict=True):
         for ch in rec.extra_channels:
-            out.append(RecordChannelTerm(ch, prepare_output(prep, rec.channel(ch), ch), build))
+            out.append(RecordChannelTerm(ch, prepare_output(prep, rec.channel(ch), ch,
+                                                            source=rec.source), build))
     return out

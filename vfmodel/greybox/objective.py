@@ -287,6 +287,7 @@ def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
     y, yh = _output_at_h1_rate(rec.bearing, fs, f_cut_hz, sel, n_h1)
     h1 = h1_analysis(xh, yh, fs * n_h1 / n, nperseg=nperseg,
                      input_names=["u_U", "u_V", "u_W"], output_names=["u_B"])
+    _require_signal(h1, "u_B", float(rec.speed_rpm or 0.0), rec.source)
     return PreparedRecording(float(rec.speed_rpm or 0.0), fs, x, y, freq[sel], xb, n_h1, xh,
                              h1)
 
@@ -301,7 +302,8 @@ def _output_at_h1_rate(y_raw: ArrF, fs: float, f_cut_hz: float, sel: NDArray[np.
 
 
 def prepare_output(prep: PreparedRecording, y_raw: ArrF, name: str,
-                   f_cut_hz: float = F_CUT_HZ) -> PreparedRecording:
+                   f_cut_hz: float = F_CUT_HZ, source: str | None = None
+                   ) -> PreparedRecording:
     """``prep`` with another output channel of the same record (e.g. ``u_B_DE``, ``i_CM``)
     in place of ``u_B``: the channel filtered and resampled as ``u_B`` is, and its H1 from
     the same terminal voltages with the same estimator settings (segment length, overlap,
@@ -314,7 +316,19 @@ def prepare_output(prep: PreparedRecording, y_raw: ArrF, name: str,
     h1 = h1_analysis(prep.terminals_h1, yh, prep.fs_h1, nperseg=prep.h1.nperseg,
                      noverlap=prep.h1.noverlap, window=prep.h1.window,
                      input_names=["u_U", "u_V", "u_W"], output_names=[name])
+    _require_signal(h1, name, prep.speed_rpm, source)
     return replace(prep, bearing=y, h1=h1)
+
+
+def _require_signal(h1: H1Result, name: str, rpm: float, source: str | None) -> None:
+    """InputError for an output channel without power where H1 is defined: a flat channel
+    (a disconnected probe records zeros) has no transfer to compare, and its whitening
+    would divide by zero (the detective ended in "Residuals are not finite" on such a
+    ``u_B_DE``)."""
+    if not np.any(np.nan_to_num(h1.gyy[h1.valid, 0]) > 0):
+        raise InputError("recorded channel carries no signal", source=source,
+                         place=f"{name} of the recording at {rpm:g} rpm",
+                         found="zero power in every H1 bin", expected="a measured channel")
 
 
 def steady_output(h_bins: ArrC, prep: PreparedRecording, *, for_h1: bool = False) -> ArrF:
