@@ -31,10 +31,13 @@ def _dense_sigma(model: RationalModel, f_data: np.ndarray) -> float:
     return worst
 
 
-@pytest.mark.parametrize("name", ["coaxial.s2p", "circuit_vi_Coaxial_T.s3p"])
+@pytest.mark.parametrize("name", ["coaxial.s2p", "circuit_vi_Coaxial_T.s3p", "hfss_18.2.s3p"])
 def test_fit_passive_within_bound(name: str) -> None:
     """Before the relocation: 1.53x (coaxial, 2 ports, 101 points) and 2.47x
-    (circuit_vi_Coaxial_T, 3 ports, 3 points) of the fit error after enforcement."""
+    (circuit_vi_Coaxial_T, 3 ports, 3 points) of the fit error after enforcement.
+    hfss_18.2 (3 ports, 11 points, data floor 1.2e-4, fit 1e-11): 1.26x its floor while
+    enforcement minimised the change per entry relative to |H|; 1.02x since it minimises
+    it in the fit's norm (uniform for S data, the norm of the relative RMS error)."""
     data = read_spectrum(VFBENCH / name).to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
