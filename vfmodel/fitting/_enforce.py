@@ -500,7 +500,8 @@ def enforce(
     """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`."""
     if weighting not in ("relative", "uniform"):
         raise InputError(
-            "weighting: unknown choice", found=repr(weighting), expected="relative, uniform"
+            "weighting: unknown choice", found=repr(weighting),
+            expected="auto, relative, uniform"
         )
     if max_iter < 1:
         raise InputError("max_iter must be >= 1", found=str(max_iter))

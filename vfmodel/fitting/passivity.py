@@ -421,7 +421,7 @@ def enforce_passivity(
     model: RationalModel,
     data: FrequencyData | skrf.Network | str | os.PathLike[str] | None = None,
     *,
-    weighting: Literal["relative", "uniform"] = "relative",
+    weighting: Literal["auto", "relative", "uniform"] = "auto",
     perturb_d: bool = True,
     max_iter: int = ENFORCE_ITERATIONS,
     margin: float = 1e-6,
@@ -448,9 +448,11 @@ def enforce_passivity(
         fitted to, taken as :func:`vfmodel.vector_fit` takes them; converted to the
         model's kind. Default: 400 log-spaced points over the
         model's poles, weighted by the model's own response.
-    weighting : {"relative", "uniform"}
+    weighting : {"auto", "relative", "uniform"}
         Weight of the change of entry (i, j) at frequency f: ``1 / |H_ij(f)|`` (floored at
-        1e-3 of the largest entry at that frequency) or 1.
+        1e-3 of the largest entry at that frequency) or 1. "auto": uniform for S models
+        (the norm of their fit and of its relative RMS error over all entries), relative for
+        Z and Y models (their fits are judged per point).
     perturb_d : bool
         Also perturb D (the asymptotic conditions become constraints).
     max_iter : int
@@ -505,6 +507,8 @@ def enforce_passivity(
                 expected=f"data within {100 * ACTIVE_FLOOR:g} % of passive, or "
                 "allow_active=True",
             )
+    if weighting == "auto":
+        weighting = "uniform" if model.kind == "S" else "relative"
     if model.delay:
         # |exp(-j w delay)| = 1: enforce on the rational part against the advanced data
         if data is not None:
