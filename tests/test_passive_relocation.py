@@ -55,7 +55,10 @@ def test_relocation_beats_fixed_poles() -> None:
     order is fixed: with 40 points of 4 responses a 20-pole fit is near interpolation, and
     the automatic order varied with the BLAS kernel (16-25 poles, 19-50 before the order
     was judged by the error corrected for the fitted parameters), which would test the
-    order choice, not the relocation."""
+    order choice, not the relocation. The enforcement is the per-entry relative one these
+    figures were measured with (the API default before session 17). With the uniform
+    weighting, now the default for S, the fixed poles enforce to 7.8e-4 and the relocation
+    to 4.0e-4: 0.51x, near this test's 0.5 and on either side of it by BLAS kernel."""
     data = read_spectrum(VFBENCH / "Clarity_example.S2P").to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -66,7 +69,8 @@ def test_relocation_beats_fixed_poles() -> None:
     def enforce(m: RationalModel) -> RationalModel | None:
         if check_passivity(m).passive:
             return m
-        return enforce_passivity(m, data, margin=margin, allow_active=True)[0]
+        return enforce_passivity(m, data, margin=margin, allow_active=True,
+                                 weighting="relative")[0]
 
     fixed = enforce(model)
     assert fixed is not None
