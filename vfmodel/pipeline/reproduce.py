@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -69,6 +70,7 @@ from vfmodel.greybox.metrics import (
     spectral_corr,
     spectral_corr_periodogram,
 )
+from vfmodel.greybox.model_error import plateau_discrepancy
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.path_prior import with_path_prior
 from vfmodel.greybox.priors import parameter_priors
@@ -221,6 +223,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         lub = film_equivalent(sf.params, eff) if sf.state == "rotating" else \
             {"r_ohm": 0.0, "c_f": 0.0}
         key = rpm_key(sf.speed_rpm)
+        h1_model = term.h1_model(sf.params)
         entry: dict[str, Any] = {
             "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
             "rel_err_pct": _f(rel_err), "spectral_corr": corr,
@@ -239,15 +242,21 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             rep = sf.report if not mach else with_machine_uncertainty(
                 sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1],
                 machine_names=(*SHARED, *(n for n in STANDSTILL_HIDDEN if n not in SHARED)))
+            # with the structural model error of the plateau level the record shows
+            # (vfmodel.greybox.model_error), carried to each quantity by its regression
+            # on that level
+            disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
+            cm = (sf.record or term).cm_transfer
+            iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau)
+
             entry["lubricant_interval"] = {
-                "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
-                "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
-                "c_b_f": log_interval(sf.params, rep,
-                                      lambda q: divider_capacitances(q, eff)["c_b"]),
-                "c_b_100khz_f": log_interval(sf.params, rep,
-                                             lambda q: bearing_capacitance(q, eff)),
+                "r_ohm": iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
+                "c_f": iv(lambda q: film_equivalent(q, eff)["c_f"]),
+                "c_b_f": iv(lambda q: divider_capacitances(q, eff)["c_b"]),
+                "c_b_100khz_f": iv(lambda q: bearing_capacitance(q, eff)),
                 # the plateau level the record fixes (identifiable without the scale)
-                "cm_transfer_100khz": log_interval(sf.params, rep, (sf.record or term).cm_transfer),
+                "cm_transfer_100khz": iv(cm),
+                "model_error": disc.to_json_dict(),
             }
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
             entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
@@ -271,8 +280,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         bmod = bvr_estimate(tu, tv, tw, u_model, prep.fs, nperseg=nps)
         speeds.append(SpeedResult(
             sf.speed_rpm, prep.fs, prep.bearing, u_model, u_bvr, prep.terminals, bl,
-            bm.freq_hz, bm.bvr, bmod.bvr, term.freq_hz, term.h_meas,
-            term.h1_model(sf.params)))
+            bm.freq_hz, bm.bvr, bmod.bvr, term.freq_hz, term.h_meas, h1_model))
     progress("validation", n_sp, n_sp)
     if rel_rot:
         bearing["mean_rel_err_pct_rotating"] = float(np.mean(rel_rot))
