@@ -29,7 +29,7 @@ network's structural error); ``blackbox`` the band errors of grey and black box;
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -144,6 +144,20 @@ def netlist_text(ident: Identification, speed_rpm: float) -> str:
     return to_spice(circ, title=title, extra_lines=usage)
 
 
+def _remembered(fn: Callable[[ParamSet], float]) -> Callable[[ParamSet], float]:
+    """``fn`` remembering its values by parameter vector: the intervals of one speed take
+    the gradient of the same anchor (one network solve per point) once, not per interval."""
+    memo: dict[bytes, float] = {}
+
+    def g(p: ParamSet) -> float:
+        key = p.vector.tobytes()
+        if key not in memo:
+            memo[key] = fn(p)
+        return memo[key]
+
+    return g
+
+
 def _f(x: float) -> float | None:
     """A finite number, or None (JSON null) where it is undefined or unbounded: a relative
     error against a measured value of 0, an uncertainty the data do not bound."""
@@ -246,7 +260,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             # (vfmodel.greybox.model_error), carried to each quantity by its regression
             # on that level
             disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
-            cm = (sf.record or term).cm_transfer
+            cm = _remembered((sf.record or term).cm_transfer)
             iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau)
 
             entry["lubricant_interval"] = {
