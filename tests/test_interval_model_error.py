@@ -44,6 +44,10 @@ def test_regression_on_the_anchor_matches_the_analytic_value() -> None:
     ia = log_interval(p, rep, anchor, anchor=anchor, anchor_tau=tau)
     assert ia["std_log"] is not None
     assert abs(ia["std_log"] - np.sqrt(s1**2 + s2**2 + tau**2)) < 1e-6
+    # the regression taken in a stage that moves only ``a`` (b held): beta = 1
+    held = log_interval(p, rep, lambda q: q["a"], anchor=anchor, anchor_tau=tau,
+                        anchor_report=_Report(("a",), np.array([[s1**2]])))
+    assert held["std_log"] is not None and abs(held["std_log"] - np.hypot(s1, tau)) < 1e-6
     # without the term the interval is the noise interval (unchanged API)
     plain = log_interval(p, rep, lambda q: q["a"])
     assert plain["std_log"] is not None and abs(plain["std_log"] - s1) < 1e-6

@@ -207,7 +207,8 @@ def log_interval(params: ParamSet, report: LogCovariance,
                  quantity: Callable[[ParamSet], float],
                  level_z: float = 1.959964, *,
                  anchor: Callable[[ParamSet], float] | None = None,
-                 anchor_tau: float = 0.0) -> dict[str, float | None]:
+                 anchor_tau: float = 0.0,
+                 anchor_report: LogCovariance | None = None) -> dict[str, float | None]:
     """Value and 95 % interval of a positive derived ``quantity(params)`` from a fit's
     covariance of ``log p`` (``report``: e.g. an identification ``StageReport``), by the
     delta method in log space: ``var log q = g^T C g`` with ``g = d log q / d log p`` by
@@ -219,7 +220,10 @@ def log_interval(params: ParamSet, report: LogCovariance,
     covariance does not hold. It reaches ``q`` through the posterior regression of
     ``log q`` on ``log anchor``: ``var log q += (beta anchor_tau)^2``,
     ``beta = g^T C g_a / g_a^T C g_a`` (1 for the anchor itself, 0 for a quantity the
-    anchor does not inform).
+    anchor does not inform). ``anchor_report`` (default ``report``): the covariance the
+    regression is taken on, e.g. the conditional covariance of the stage whose fit carries
+    the error (the parameters that stage moves to meet the biased level), where ``report``
+    also holds the uncertainty of parameters held fixed in that stage.
 
     Returns ``value``, ``lo``, ``hi`` and ``std_log`` (``lo``/``hi``/``std_log`` ``None``
     when the data do not bound it: an infinite variance); with ``anchor`` also
@@ -243,9 +247,14 @@ def log_interval(params: ParamSet, report: LogCovariance,
     if anchor is not None:
         extra["std_log_noise"] = float(np.sqrt(var))
         beta = 0.0
-        if anchor_tau > 0 and float(anchor(params)) > 0:
-            ga = _log_gradient(params, names, anchor)
-            vaa, vqa = _quadratic(ga, cov, ga), _quadratic(g, cov, ga)
+        basis = report if anchor_report is None else anchor_report
+        if anchor_tau > 0 and float(anchor(params)) > 0 and basis.cov_log is not None:
+            kb = [k for k, n in enumerate(basis.names) if n in params]
+            nb = tuple(basis.names[k] for k in kb)
+            cb = basis.cov_log[np.ix_(kb, kb)]
+            gq = g if nb == names else _log_gradient(params, nb, quantity)
+            ga = _log_gradient(params, nb, anchor)
+            vaa, vqa = _quadratic(ga, cb, ga), _quadratic(gq, cb, ga)
             if vaa is not None and vqa is not None and vaa > 0:
                 beta = vqa / vaa
         extra["model_error_log"] = abs(beta) * anchor_tau

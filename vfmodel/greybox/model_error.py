@@ -32,7 +32,11 @@ variance ``tau^2`` near ``f0``:
 :func:`.lsq.log_interval` adds it to a derived quantity ``q`` through the posterior
 regression of ``log q`` on ``log H_cm`` (the shift of the estimate of ``q`` when the plateau
 level the fit matched is off by one unit): ``var log q += (beta tau)^2``,
-``beta = g_q^T C g_H / g_H^T C g_H``; ``beta = 1`` for ``H_cm`` itself.
+``beta = g_q^T C g_H / g_H^T C g_H``; ``beta = 1`` for ``H_cm`` itself. ``reproduce`` takes
+``C`` as the speed's own stage covariance (the lubricant parameters that fit moves to meet
+the level; the machine is held there): with the machine's covariance added, ``C_b`` and
+``H_cm`` are nearly uncorrelated while ``H_cm``'s variance is tiny, and the regression
+gave ``beta`` from 17 to 199 at the speeds of one bench (independent bench 107).
 
 References
 ----------

@@ -22,8 +22,10 @@ through their physics priors (:mod:`vfmodel.greybox.path_prior`: the standstill 
 ``C_wr`` times the path impedance, not the scale; ``C_wr`` and the bearing capacitance are
 identifiable only through those priors; ``lubricant_interval.cm_transfer_100khz`` is the
 bearing voltage per volt of common-mode terminal voltage at 100 kHz, the plateau level that
-the record fixes whatever that scale, with an interval that holds the noise, not the
-network's structural error); ``blackbox`` the band errors of grey and black box;
+the record fixes whatever that scale). The lubricant intervals also hold the network's
+structural error of that plateau level, measured on the record
+(``lubricant_interval.model_error``, :mod:`vfmodel.greybox.model_error`; how each interval
+is formed: ``model.interval_method``); ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
 
@@ -80,6 +82,22 @@ __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_k
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
+
+
+INTERVAL_METHOD = {
+    "divider_intervals": "delta method on the last machine stage's covariance of log p "
+                         "(chi2_red and residual-correlation scaled, path prior); no "
+                         "model-error term: the standstill record has no plateau level to "
+                         "check the network against",
+    "lubricant_interval": "delta method on the speed's stage covariance (chi2_red and "
+                          "residual-correlation scaled) with the machine's, plus the "
+                          "structural model error: std_log^2 = std_log_noise^2 + "
+                          "model_error_log^2, model_error_log = |beta| tau, tau from "
+                          "lubricant_interval.model_error (vfmodel.greybox.model_error), "
+                          "beta the regression of log q on log cm_transfer_100khz in the "
+                          "speed's own stage covariance",
+}
+"""How results.json's 95 % intervals are formed (``model.interval_method``)."""
 
 
 def rpm_key(speed_rpm: float) -> str:
@@ -258,10 +276,12 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                 machine_names=(*SHARED, *(n for n in STANDSTILL_HIDDEN if n not in SHARED)))
             # with the structural model error of the plateau level the record shows
             # (vfmodel.greybox.model_error), carried to each quantity by its regression
-            # on that level
+            # on that level in the speed's own stage (the parameters its fit moves; the
+            # machine is held there, and the standstill data do not see the plateau)
             disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
             cm = _remembered((sf.record or term).cm_transfer)
-            iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau)
+            iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
+                         anchor_report=sf.report)
 
             entry["lubricant_interval"] = {
                 "r_ohm": iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
@@ -318,6 +338,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         "estimate": "maximum a posteriori (physical priors)" if priors else
                     "least squares (weak prior towards the start values)",
         "divider_intervals": divider_iv,
+        "interval_method": INTERVAL_METHOD,
         "stages": [{"name": s.name, "chi2_red": s.chi2_red, "nfev": s.nfev,
                     "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],
         "speeds": {rpm_key(s.speed_rpm): {"state": s.state, "params": s.params.as_dict()}
