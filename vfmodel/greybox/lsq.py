@@ -177,23 +177,10 @@ class LogCovariance(Protocol):
     def cov_log(self) -> NDArray[np.float64] | None: ...
 
 
-def log_interval(params: ParamSet, report: LogCovariance,
-                 quantity: Callable[[ParamSet], float],
-                 level_z: float = 1.959964) -> dict[str, float | None]:
-    """Value and 95 % interval of a positive derived ``quantity(params)`` from a fit's
-    covariance of ``log p`` (``report``: e.g. an identification ``StageReport``), by the
-    delta method in log space: ``var log q = g^T C g`` with ``g = d log q / d log p`` by
-    central differences of step 1e-4.
-
-    Returns ``value``, ``lo``, ``hi`` and ``std_log`` (``lo``/``hi``/``std_log`` ``None``
-    when the data do not bound it: an infinite variance).
-    """
-    q0 = float(quantity(params))
-    if report.cov_log is None or q0 <= 0:
-        return {"value": q0, "lo": None, "hi": None, "std_log": None}
-    # names of the report that ``params`` holds (a joint stage also has per-speed copies)
-    keep = [k for k, n in enumerate(report.names) if n in params]
-    names = tuple(report.names[k] for k in keep)
+def _log_gradient(params: ParamSet, names: tuple[str, ...],
+                  quantity: Callable[[ParamSet], float]) -> ArrF:
+    """``d log quantity / d log p`` of ``names`` by central differences of step 1e-4 (0
+    where the quantity is not positive on either side)."""
     x0 = params.to_log(names)
     g = np.zeros(len(names))
     for j in range(len(names)):
@@ -203,13 +190,77 @@ def log_interval(params: ParamSet, report: LogCovariance,
         qp = quantity(params.from_log(xp, names))
         qm = quantity(params.from_log(xm, names))
         g[j] = (np.log(qp) - np.log(qm)) / 2e-4 if qp > 0 and qm > 0 else 0.0
+    return g
+
+
+def _quadratic(a: ArrF, cov: ArrF, b: ArrF) -> float | None:
+    """``a^T cov b`` over the entries where ``a`` or ``b`` is not ~0; None when ``cov`` is
+    not finite there (a direction the data do not bound)."""
+    used = (np.abs(a) > 1e-9) | (np.abs(b) > 1e-9)
+    sub = cov[np.ix_(used, used)]
+    if not np.all(np.isfinite(sub)):
+        return None
+    return float(a[used] @ sub @ b[used])
+
+
+def log_interval(params: ParamSet, report: LogCovariance,
+                 quantity: Callable[[ParamSet], float],
+                 level_z: float = 1.959964, *,
+                 anchor: Callable[[ParamSet], float] | None = None,
+                 anchor_tau: float = 0.0,
+                 anchor_report: LogCovariance | None = None) -> dict[str, float | None]:
+    """Value and 95 % interval of a positive derived ``quantity(params)`` from a fit's
+    covariance of ``log p`` (``report``: e.g. an identification ``StageReport``), by the
+    delta method in log space: ``var log q = g^T C g`` with ``g = d log q / d log p`` by
+    central differences of step 1e-4.
+
+    ``anchor`` and ``anchor_tau`` add a structural model error (:mod:`.model_error`): the
+    log of the positive quantity ``anchor`` (e.g. the common-mode bearing transfer at
+    100 kHz) is off by a zero-mean error of standard deviation ``anchor_tau`` that the noise
+    covariance does not hold. It reaches ``q`` through the posterior regression of
+    ``log q`` on ``log anchor``: ``var log q += (beta anchor_tau)^2``,
+    ``beta = g^T C g_a / g_a^T C g_a`` (1 for the anchor itself, 0 for a quantity the
+    anchor does not inform). ``anchor_report`` (default ``report``): the covariance the
+    regression is taken on, e.g. the conditional covariance of the stage whose fit carries
+    the error (the parameters that stage moves to meet the biased level), where ``report``
+    also holds the uncertainty of parameters held fixed in that stage.
+
+    Returns ``value``, ``lo``, ``hi`` and ``std_log`` (``lo``/``hi``/``std_log`` ``None``
+    when the data do not bound it: an infinite variance); with ``anchor`` also
+    ``std_log_noise`` (without the model error) and ``model_error_log`` (``beta tau``).
+    """
+    q0 = float(quantity(params))
+    extra: dict[str, float | None] = {}
+    if anchor is not None:
+        extra = {"std_log_noise": None, "model_error_log": None}
+    if report.cov_log is None or q0 <= 0:
+        return {"value": q0, "lo": None, "hi": None, "std_log": None, **extra}
+    # names of the report that ``params`` holds (a joint stage also has per-speed copies)
+    keep = [k for k, n in enumerate(report.names) if n in params]
+    names = tuple(report.names[k] for k in keep)
+    g = _log_gradient(params, names, quantity)
     cov = report.cov_log[np.ix_(keep, keep)]
-    used = np.abs(g) > 1e-9
-    if not np.all(np.isfinite(cov[np.ix_(used, used)])):
-        return {"value": q0, "lo": None, "hi": None, "std_log": None}
-    var = float(g[used] @ cov[np.ix_(used, used)] @ g[used])
-    sd = float(np.sqrt(max(var, 0.0)))
+    v = _quadratic(g, cov, g)
+    if v is None:
+        return {"value": q0, "lo": None, "hi": None, "std_log": None, **extra}
+    var = max(v, 0.0)
+    if anchor is not None:
+        extra["std_log_noise"] = float(np.sqrt(var))
+        beta = 0.0
+        basis = report if anchor_report is None else anchor_report
+        if anchor_tau > 0 and float(anchor(params)) > 0 and basis.cov_log is not None:
+            kb = [k for k, n in enumerate(basis.names) if n in params]
+            nb = tuple(basis.names[k] for k in kb)
+            cb = basis.cov_log[np.ix_(kb, kb)]
+            gq = g if nb == names else _log_gradient(params, nb, quantity)
+            ga = _log_gradient(params, nb, anchor)
+            vaa, vqa = _quadratic(ga, cb, ga), _quadratic(gq, cb, ga)
+            if vaa is not None and vqa is not None and vaa > 0:
+                beta = vqa / vaa
+        extra["model_error_log"] = abs(beta) * anchor_tau
+        var += (beta * anchor_tau) ** 2
+    sd = float(np.sqrt(var))
     if level_z * sd > _LOG_SPAN_MAX:  # no bound the data give (exp would overflow)
-        return {"value": q0, "lo": None, "hi": None, "std_log": sd}
+        return {"value": q0, "lo": None, "hi": None, "std_log": sd, **extra}
     return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
-            "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd}
+            "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd, **extra}

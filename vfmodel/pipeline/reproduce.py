@@ -22,15 +22,18 @@ through their physics priors (:mod:`vfmodel.greybox.path_prior`: the standstill 
 ``C_wr`` times the path impedance, not the scale; ``C_wr`` and the bearing capacitance are
 identifiable only through those priors; ``lubricant_interval.cm_transfer_100khz`` is the
 bearing voltage per volt of common-mode terminal voltage at 100 kHz, the plateau level that
-the record fixes whatever that scale, with an interval that holds the noise, not the
-network's structural error); ``blackbox`` the band errors of grey and black box;
+the record fixes whatever that scale). The lubricant intervals also hold the network's
+structural error of that plateau level, measured on the record
+(``lubricant_interval.model_error``, :mod:`vfmodel.greybox.model_error`; how each interval
+is formed: ``model.interval_method``); ``blackbox`` the band errors of grey and black box;
 ``greybox_beats_baseline`` the per-speed comparison of relative peak errors.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -69,6 +72,7 @@ from vfmodel.greybox.metrics import (
     spectral_corr,
     spectral_corr_periodogram,
 )
+from vfmodel.greybox.model_error import plateau_discrepancy
 from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.path_prior import with_path_prior
 from vfmodel.greybox.priors import parameter_priors
@@ -78,6 +82,22 @@ __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_k
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
+
+
+INTERVAL_METHOD = {
+    "divider_intervals": "delta method on the last machine stage's covariance of log p "
+                         "(chi2_red and residual-correlation scaled, path prior); no "
+                         "model-error term: the standstill record has no plateau level to "
+                         "check the network against",
+    "lubricant_interval": "delta method on the speed's stage covariance (chi2_red and "
+                          "residual-correlation scaled) with the machine's, plus the "
+                          "structural model error: std_log^2 = std_log_noise^2 + "
+                          "model_error_log^2, model_error_log = |beta| tau, tau from "
+                          "lubricant_interval.model_error (vfmodel.greybox.model_error), "
+                          "beta the regression of log q on log cm_transfer_100khz in the "
+                          "speed's own stage covariance",
+}
+"""How results.json's 95 % intervals are formed (``model.interval_method``)."""
 
 
 def rpm_key(speed_rpm: float) -> str:
@@ -140,6 +160,20 @@ def netlist_text(ident: Identification, speed_rpm: float) -> str:
         "* impedance U-Frame: add 'IZ 0 U AC 1' and read v(U) (V, W open)",
     ]
     return to_spice(circ, title=title, extra_lines=usage)
+
+
+def _remembered(fn: Callable[[ParamSet], float]) -> Callable[[ParamSet], float]:
+    """``fn`` remembering its values by parameter vector: the intervals of one speed take
+    the gradient of the same anchor (one network solve per point) once, not per interval."""
+    memo: dict[bytes, float] = {}
+
+    def g(p: ParamSet) -> float:
+        key = p.vector.tobytes()
+        if key not in memo:
+            memo[key] = fn(p)
+        return memo[key]
+
+    return g
 
 
 def _f(x: float) -> float | None:
@@ -221,6 +255,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         lub = film_equivalent(sf.params, eff) if sf.state == "rotating" else \
             {"r_ohm": 0.0, "c_f": 0.0}
         key = rpm_key(sf.speed_rpm)
+        h1_model = term.h1_model(sf.params)
         entry: dict[str, Any] = {
             "peak_measured_v": pk_meas, "peak_model_v": pk_model, "abs_err_v": abs_err,
             "rel_err_pct": _f(rel_err), "spectral_corr": corr,
@@ -239,15 +274,23 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             rep = sf.report if not mach else with_machine_uncertainty(
                 sf.record if sf.record is not None else term, sf.params, sf.report, mach[-1],
                 machine_names=(*SHARED, *(n for n in STANDSTILL_HIDDEN if n not in SHARED)))
+            # with the structural model error of the plateau level the record shows
+            # (vfmodel.greybox.model_error), carried to each quantity by its regression
+            # on that level in the speed's own stage (the parameters its fit moves; the
+            # machine is held there, and the standstill data do not see the plateau)
+            disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
+            cm = _remembered((sf.record or term).cm_transfer)
+            iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
+                         anchor_report=sf.report)
+
             entry["lubricant_interval"] = {
-                "r_ohm": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["r_ohm"]),
-                "c_f": log_interval(sf.params, rep, lambda q: film_equivalent(q, eff)["c_f"]),
-                "c_b_f": log_interval(sf.params, rep,
-                                      lambda q: divider_capacitances(q, eff)["c_b"]),
-                "c_b_100khz_f": log_interval(sf.params, rep,
-                                             lambda q: bearing_capacitance(q, eff)),
+                "r_ohm": iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
+                "c_f": iv(lambda q: film_equivalent(q, eff)["c_f"]),
+                "c_b_f": iv(lambda q: divider_capacitances(q, eff)["c_b"]),
+                "c_b_100khz_f": iv(lambda q: bearing_capacitance(q, eff)),
                 # the plateau level the record fixes (identifiable without the scale)
-                "cm_transfer_100khz": log_interval(sf.params, rep, (sf.record or term).cm_transfer),
+                "cm_transfer_100khz": iv(cm),
+                "model_error": disc.to_json_dict(),
             }
             entry["lubricant_params"] = {n: sf.params[n] for n in sf.report.names}
             entry["lubricant_rel_std"] = {n: _f(v) for n, v in sf.report.rel_std.items()}
@@ -271,8 +314,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         bmod = bvr_estimate(tu, tv, tw, u_model, prep.fs, nperseg=nps)
         speeds.append(SpeedResult(
             sf.speed_rpm, prep.fs, prep.bearing, u_model, u_bvr, prep.terminals, bl,
-            bm.freq_hz, bm.bvr, bmod.bvr, term.freq_hz, term.h_meas,
-            term.h1_model(sf.params)))
+            bm.freq_hz, bm.bvr, bmod.bvr, term.freq_hz, term.h_meas, h1_model))
     progress("validation", n_sp, n_sp)
     if rel_rot:
         bearing["mean_rel_err_pct_rotating"] = float(np.mean(rel_rot))
@@ -296,6 +338,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         "estimate": "maximum a posteriori (physical priors)" if priors else
                     "least squares (weak prior towards the start values)",
         "divider_intervals": divider_iv,
+        "interval_method": INTERVAL_METHOD,
         "stages": [{"name": s.name, "chi2_red": s.chi2_red, "nfev": s.nfev,
                     "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],
         "speeds": {rpm_key(s.speed_rpm): {"state": s.state, "params": s.params.as_dict()}

@@ -257,25 +257,32 @@ def _film(r: dict[str, Any]) -> str:
             rows.append((E(k), num(v["lubricant"]["r_ohm"], "Ω", ["bearing", k, "lubricant",
                                                                    "r_ohm"]),
                          "", num(v["lubricant"]["c_f"], "F", ["bearing", k, "lubricant",
-                                                              "c_f"]), "", "–", "",
-                         E(str(v.get("state", "")))))
+                                                              "c_f"]), "", "–", "", "–", "",
+                         "–", E(str(v.get("state", "")))))
             continue
         base = ["bearing", k, "lubricant_interval"]
         rr, rf = _interval(ivs.get("r_ohm"), "Ω", [*base, "r_ohm"])
         cc, cf = _interval(ivs.get("c_f"), "F", [*base, "c_f"])
         bb, bf = _interval(ivs.get("c_b_100khz_f") or ivs.get("c_b_f"), "F",
                            [*base, "c_b_100khz_f" if "c_b_100khz_f" in ivs else "c_b_f"])
-        rows.append((E(k), rr, rf, cc, cf, bb, bf, E(str(v.get("state", "")))))
+        hh, hf = _interval(ivs.get("cm_transfer_100khz"), "", [*base, "cm_transfer_100khz"])
+        tau = (ivs.get("model_error") or {}).get("tau_log")
+        me = num(tau, "%", [*base, "model_error", "tau_log"], 3, scale=100.0) \
+            if tau is not None else "–"
+        rows.append((E(k), rr, rf, cc, cf, bb, bf, hh, hf, me, E(str(v.get("state", "")))))
     if not rows:
         return ""
     return ("<h2 id='film'>Lubricant film per speed (one bearing, 95 % intervals)</h2>"
             + table(["speed (rpm)", "R_film", "", "C_film", "", "bearing C at 100 kHz", "",
-                     "state"], rows)
+                     "H_cm at 100 kHz", "", "model error", "state"], rows)
             + "<p class='note'>R_film: DC resistance of the film (layers in series); C_film: "
             "its capacitance above the RC corners; bearing C at 100 kHz: Im Y / ω of the "
             "whole bearing. At standstill the metallic contact shorts the film (reported "
-            "as 0). Intervals: delta method on the covariance of log p of the speed's "
-            "stage.</p>")
+            "as 0). H_cm: bearing voltage per volt of common-mode terminal voltage. Intervals: "
+            "delta method on the covariance of log p of the speed's stage, plus the "
+            "structural model error (model error: RMS log discrepancy of the model's "
+            "common-mode H1 from the measured one near 100 kHz, less its noise), carried "
+            "to each quantity by its regression on log H_cm.</p>")
 
 
 def _bvr(r: dict[str, Any]) -> str:
