@@ -91,7 +91,7 @@ def main() -> int:
               f"{model.n_poles:5d} {n_sk:6d} {err_vf:9.2e} {err_sk:9.2e}", flush=True)
     if ratios:
         print(f"median time ratio vfmodel / scikit-rf over {len(ratios)} small files: "
-              f"{statistics.median(ratios):.2f}")
+              f"{statistics.median(ratios):.3f}")
     return 0
 
 
