@@ -177,3 +177,15 @@ def test_tall_program_primal_equals_dual() -> None:
     obj_p, obj_d = np.linalg.norm(r_blocks @ x_p), np.linalg.norm(r_blocks @ x_d)
     assert abs(obj_p - obj_d) <= 1e-5 * obj_d
     assert np.linalg.norm(x_p - x_d) <= 1e-3 * np.linalg.norm(x_d)
+
+
+def test_enforcement_reports_each_program() -> None:
+    # a long enforcement is not silent: progress(stage, k, max_iter) before program k + 1,
+    # and (max_iter, max_iter) once certified; as many programs as the report counts
+    model = random_nonpassive(np.random.default_rng(5), "S", 3)
+    calls: list[tuple[str, int, int]] = []
+    _, rep = enforce_passivity(model, max_iter=30,
+                               progress=lambda s, d, t: calls.append((s, d, t)))
+    stages = {s for s, _, _ in calls}
+    assert len(stages) == 1
+    assert [(d, t) for _, d, t in calls] == [(k, 30) for k in range(rep.iterations)] + [(30, 30)]

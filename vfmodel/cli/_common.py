@@ -47,7 +47,9 @@ class _Bars:
         from tqdm import tqdm
 
         bar = self._bars.get(stage)
-        if bar is None:
+        # a stage that starts again after its bar closed (the retries of a passivity
+        # enforcement, one bar each) gets a new bar
+        if bar is None or (bar.disable and done < total):
             # no monitor thread: identification forks worker processes only from a
             # process without threads (vfmodel.core.parallel)
             tqdm.monitor_interval = 0

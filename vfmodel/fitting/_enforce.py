@@ -61,6 +61,7 @@ from numpy.typing import NDArray
 from scipy import sparse
 
 from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, SolverError
 from vfmodel.fitting._qp import DConstraint, PsdBlock, solve_qp, svec, unsvec
@@ -496,6 +497,7 @@ def enforce(
     perturb_d: bool,
     max_iter: int,
     margin: float,
+    progress: Progress = no_progress,
 ) -> tuple[RationalModel, PassivityReport]:
     """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`."""
     if weighting not in ("relative", "uniform"):
@@ -575,6 +577,7 @@ def enforce(
     report = first
     scale = 1.0  # objective size of the last program (the next one's scale)
     for it in range(1, max_iter + 1):
+        progress(_STAGE, it - 1, max_iter)
         pool = np.union1d(pool, new_f)
         extra = np.setdiff1d(new_f, grid)
         if it == 1 or extra.size:
@@ -617,6 +620,7 @@ def enforce(
             continue
         report = check_passivity(current, method="hamiltonian")
         if report.passive:
+            progress(_STAGE, max_iter, max_iter)
             dh = current(f) - h_model_data
             rms = float(np.sqrt(np.mean(np.abs(dh) ** 2)))
             rel = float(np.linalg.norm(dh)) / max(float(np.linalg.norm(h_data)), 1e-300)
@@ -640,6 +644,7 @@ def enforce(
     )
 
 
+_STAGE = "passivity enforcement (convex programs)"  # progress stage of one enforcement
 _ROUNDING = 8 * np.finfo(float).eps  # relative margin of a projected constant
 
 

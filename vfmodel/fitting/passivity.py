@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize_scalar
 
 from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
+from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import InputError, PassivityError, PassivityWarning
 from vfmodel.fitting._hamiltonian import crossing_frequencies, scaled_model
@@ -426,6 +427,7 @@ def enforce_passivity(
     max_iter: int = ENFORCE_ITERATIONS,
     margin: float = 1e-6,
     allow_active: bool = False,
+    progress: Progress = no_progress,
 ) -> tuple[RationalModel, PassivityReport]:
     """Make a stable Z, Y or S model passive with the smallest weighted change of its response.
 
@@ -464,6 +466,9 @@ def enforce_passivity(
         Enforce even when the data are active (their passivity violation floor,
         :func:`vfmodel.fitting.data_passivity.data_passivity`, exceeds 5 %); by default
         that is refused, since a passive model of an amplifier is not a model of it.
+    progress : callable
+        ``progress(stage, done, total)`` once per convex program (programs of a many-pole
+        model can take seconds to a minute each).
 
     Returns
     -------
@@ -517,7 +522,7 @@ def enforce_passivity(
             )
         rational, report = enforce(
             model.without_delay(), data, weighting=weighting, perturb_d=perturb_d,
-            max_iter=max_iter, margin=margin,
+            max_iter=max_iter, margin=margin, progress=progress,
         )
         return RationalModel(rational.poles, rational.residues, rational.d, rational.e,
                              rational.kind, rational.z0, delay=model.delay), report
@@ -528,4 +533,5 @@ def enforce_passivity(
         perturb_d=perturb_d,
         max_iter=max_iter,
         margin=margin,
+        progress=progress,
     )

@@ -163,7 +163,7 @@ def run_fit(
             # hfss_18.2 1.02x against 1.26x its bound, mlin 2.9x against 5.9x
             enforce = partial(enforce_passivity, data=data, margin=margin, allow_active=True,
                               weighting="uniform" if report.weighting == "uniform"
-                              else "relative")
+                              else "relative", progress=progress)
             try:
                 enforced, pas_e = enforce(model, max_iter=first_iter)
                 first = (enforced, pas_e, report)
