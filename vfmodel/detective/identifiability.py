@@ -104,9 +104,9 @@ ArrF = NDArray[np.float64]
 Status = Literal["identifiable", "prior-only", "not-identifiable"]
 
 IDENTIFIED_STD_LOG = 1.0
+"""Standard deviation of ``ln p`` below which a parameter is determined (module docstring)."""
 SWITCH_SEEN_CHI2 = 10.0
 """``|Delta chi2|`` from which the data see a switch without parameters (module docstring)."""
-"""Standard deviation of ``ln p`` below which a parameter is determined (module docstring)."""
 
 _FD_STEP = 1e-6
 
