@@ -100,8 +100,7 @@ def discrepancy_tau(log_ratio: ArrF, noise_var: ArrF) -> float:
 
 def cm_noise_var(h1: H1Result, idx: NDArray[np.intp]) -> ArrF:
     """Variance of ``sum_i H1_i`` (complex) on the H1 bins ``idx`` (see the module text)."""
-    dof = max(h1.n_effective - h1.gxx.shape[1], 1.0)
-    s2 = (1.0 - np.nan_to_num(h1.coherence[idx, 0])) * h1.gyy[idx, 0] / dof
+    s2 = h1.noise_power(idx)
     ones = np.ones(h1.gxx.shape[1])
     q = np.real(np.einsum("i,fij,j->f", ones, np.linalg.inv(h1.gxx[idx]), ones))
     return np.asarray(s2 * np.maximum(q, 0.0), dtype=float)

@@ -634,8 +634,7 @@ def _whitening(h1: H1Result, mask: NDArray[np.bool_], hm: ArrC, eps: float) -> A
     """``sqrt(2) C^{-1/2}`` (n_fm, 3, 3) of the H1 covariance plus the model-error floor
     (see :func:`bearing_term`): real and imaginary parts of the whitened difference have
     unit variance. Eigenvalues floored at ``1e-12`` of the largest of each bin."""
-    dof = max(h1.n_effective - hm.shape[1], 1.0)
-    s2 = (1.0 - np.nan_to_num(h1.coherence[mask, 0])) * h1.gyy[mask, 0] / dof   # (n_fm,)
+    s2 = h1.noise_power(mask)                                                    # (n_fm,)
     # dH1 = G_nx G_xx^-1 with E[G_nx^H G_nx] = s^2 conj(G_xx) (per averaged segment):
     # E[dH1_a dH1_b^*] = s^2 [conj(G_xx)^-1]_ab (the transpose of G_xx^-1)
     cov = s2[:, None, None] * np.conj(np.linalg.inv(h1.gxx[mask]))

@@ -108,6 +108,14 @@ class H1Result:
         """Standard deviation of the phase error in degrees (small-error approximation)."""
         return np.degrees(self.mag_rel_std)
 
+    def noise_power(self, sel: Any, output: int = 0) -> NDArray[np.float64]:
+        """``s^2 = (1 - gamma^2) G_yy / (n_eff - n_in)`` of ``output`` on the bins ``sel``:
+        with ``conj(G_xx)^-1`` the covariance of the H1 row, ``E[dH_a dH_b^*] =
+        s^2 [conj(G_xx)^-1]_ab`` (module docstring; ``h_std`` is its diagonal)."""
+        dof = max(self.n_effective - self.gxx.shape[1], 1.0)
+        coh = np.nan_to_num(self.coherence[sel, output])
+        return np.asarray((1.0 - coh) * self.gyy[sel, output] / dof, dtype=float)
+
 
 def default_nperseg(n: int) -> int:
     """Welch segment length of the H1 estimator (and of the spectral correlation) for a
