@@ -59,7 +59,12 @@ from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.film_law import FilmLaw
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel, split_channels
-from vfmodel.detective.record_channels import RecordChannelTerm, record_terms
+from vfmodel.detective.record_channels import (
+    RecordChannelTerm,
+    record_terms,
+    term_channels,
+    term_residual,
+)
 from vfmodel.detective.shaft_frame import SHAFT_FRAME, PortTerm, local_names, speed_tag
 from vfmodel.errors import InputError
 from vfmodel.greybox.assembly import PHASES, TAPER_NAMES, default_params, lubricant_names
@@ -405,16 +410,8 @@ class PmsmFamily:
             rs, js = split_channels(r * scale, jm * scale[:, None] if jac else None, nf, nt,
                                     cols, len(nn))
             return rs, js, None
-        bt, p = bts[k], self.preps[k]
-        ps = self.at_speed(params, p.speed_rpm)
-        loc, cols = self._part_names(applied, params, nn, k) if jac else ([], [])
-        if jac and loc:
-            r, jm = bt.residual(ps, loc, jac=True, lmap=self._lmap(applied, ps, loc))
-            assert jm is not None
-        else:
-            r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
-        # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
-        rs, js = split_channels(r, jm if jac else None, bt.h_meas.shape[0], 3, cols, len(nn))
+        bt = bts[k]
+        rs, js = term_residual(self, bt, applied, params, self.preps[k].speed_rpm, names)
         return rs, js, bt._memo.entry()
 
     def poles(self, applied: Sequence[Candidate], params: ParamSet) -> ArrC:
@@ -598,11 +595,7 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     # the bearing channels are those of the starting structure's terms (built once, kept)
     _, bts = fam._terms((), start)
     for p, bt in zip(preps, bts, strict=True):
-        for i, ph in enumerate(PHASES):
-            hm = bt.h_meas[:, i]
-            chans.append(Channel(f"bearing:{p.speed_rpm:g}rpm:{ph}", bt.freq_hz, hm,
-                                 np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
-                                 "h1_covariance"))
+        chans += term_channels(bt, [f"bearing:{p.speed_rpm:g}rpm:{ph}" for ph in PHASES])
     ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
     chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
               for t, m, bb in ports]

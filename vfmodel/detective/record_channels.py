@@ -56,7 +56,8 @@ from vfmodel.greybox.objective import (
 )
 from vfmodel.greybox.params import ParamSet
 
-__all__ = ["CHANNEL_PREFIX", "RecordChannelTerm", "record_terms"]
+__all__ = ["CHANNEL_PREFIX", "RecordChannelTerm", "record_terms", "term_channels",
+           "term_residual"]
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
@@ -101,15 +102,8 @@ class RecordChannelTerm:
         return self._terms[spec]
 
     def channels(self, family: Any, params: ParamSet) -> list[Channel]:
-        """The detective channels (measured H1 per phase, noise as the bearing channels:
-        ``sqrt(2) sigma / |H1|``) of the starting structure."""
-        bt = self.term(family, (), params)
-        out = []
-        for i, where in enumerate(self.wheres):
-            hm = bt.h_meas[:, i]
-            out.append(Channel(where, bt.freq_hz, hm, np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
-                               "h1_covariance"))
-        return out
+        """The detective channels of the starting structure (:func:`term_channels`)."""
+        return term_channels(self.term(family, (), params), self.wheres)
 
     def model(self, family: Any, applied: Sequence[Any], params: ParamSet) -> list[ArrC]:
         """The network's H1 per phase (the estimator applied to the modelled channel)."""
@@ -122,17 +116,40 @@ class RecordChannelTerm:
         """Whitened residual of each phase channel (``[Re, Im]`` of its bins) and, with
         ``names``, its derivative with respect to ``log`` of ``names`` (a per-speed copy
         acts at its speed only, a base lubricant value not while the rotor turns)."""
-        bt = self.term(family, applied, params)
-        ps = family.at_speed(params, self.speed_rpm)
-        nn = tuple(names or ())
-        loc, cols = local_names(nn, self.speed_rpm, params)
-        if names is not None and loc:
-            r, jm = bt.residual(ps, loc, jac=True, lmap=family._lmap(applied, ps, loc))
-            assert jm is not None
-        else:
-            r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
-        return split_channels(r, jm if names is not None else None, bt.h_meas.shape[0], 3,
-                              cols, len(nn))
+        return term_residual(family, self.term(family, applied, params), applied, params,
+                             self.speed_rpm, names)
+
+
+def term_channels(bt: BearingTerm, wheres: Sequence[str]) -> list[Channel]:
+    """The detective channels of a record term, one per terminal phase (``wheres``): the
+    measured H1 with the noise ``sqrt(2) sigma / |H1|`` of ``ln H1`` (u_B and the further
+    channels alike)."""
+    out = []
+    for i, where in enumerate(wheres):
+        hm = bt.h_meas[:, i]
+        out.append(Channel(where, bt.freq_hz, hm, np.sqrt(2) * bt.sigma[:, i] / np.abs(hm),
+                           "h1_covariance"))
+    return out
+
+
+def term_residual(family: Any, bt: BearingTerm, applied: Sequence[Any], params: ParamSet,
+                  rpm: float, names: Sequence[str] | None = None
+                  ) -> tuple[list[ArrF], list[ArrF]]:
+    """Whitened residual of a record term at ``rpm`` per phase channel (``[Re, Im]`` of its
+    bins) and, with ``names``, its derivative with respect to ``log`` of ``names`` (a
+    per-speed copy acts at its speed only, a base lubricant value not while the rotor
+    turns: :func:`vfmodel.detective.shaft_frame.local_names`)."""
+    ps = family.at_speed(params, rpm)
+    nn = tuple(names or ())
+    loc, cols = local_names(nn, rpm, params)
+    if names is not None and loc:
+        r, jm = bt.residual(ps, loc, jac=True, lmap=family._lmap(applied, ps, loc))
+        assert jm is not None
+    else:
+        r, jm = bt.residual(ps)[0], np.zeros((bt.n_residuals, 0))
+    # term layout [Re (f, k), Im (f, k)] -> one channel per whitened component k
+    return split_channels(r, jm if names is not None else None, bt.h_meas.shape[0], 3,
+                          cols, len(nn))
 
 
 def record_terms(recordings: Sequence[Recording], preps: Sequence[PreparedRecording],
