@@ -154,10 +154,8 @@ class Recommendation:
         undetermined parameters (the data leave the size open, so the measurement is worth
         making when it would tell a typical-size effect); else the separation at fixed
         values."""
-        if self.after_refit is None:
-            return self.expected_delta_chi2
-        typical = self.after_refit_at_prior if self.prior_size_open else None
-        return max(self.after_refit, typical or 0.0)
+        return _rank_value(self.expected_delta_chi2, self.after_refit,
+                           self.after_refit_at_prior, self.prior_size_open)
 
     def as_json(self) -> dict[str, Any]:
         def f(x: float | None) -> float | None:
@@ -236,6 +234,14 @@ def network_spread(family: Any, fit: Net, names: Sequence[str], cov: ArrF, rpm: 
         q = part[:, finite]
         total += float(np.einsum("fi,ij,fj->", q, cov[np.ix_(finite, finite)], q))
     return total / sigma**2
+
+
+def _rank_value(fixed: float, after: float | None, after_at_prior: float | None,
+                open_: bool) -> float:
+    """:attr:`Recommendation.rank_value` from its parts."""
+    if after is None:
+        return fixed
+    return max(after, (after_at_prior or 0.0) if open_ else 0.0)
 
 
 def _miss(jac: ArrF, d: ArrF) -> float:
@@ -391,7 +397,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
             # see at all, "separated" by pinning what the spectra's refit had used)
             open_ = len(present) > 1 and not _decisive(
                 present[1].base, cmp.n_params, present[1].d.size - len(present[1].names))
-            value = d if after[0] is None else max(after[0], (after[1] or 0.0) * open_)
+            value = _rank_value(d, after[0], after[1], open_)
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
