@@ -242,17 +242,17 @@ def _bearing_cases() -> tuple[ConcealedCase, ...]:
 
 
 BEARING_CASES: tuple[ConcealedCase, ...] = _bearing_cases()
-COMMITTED_BEARING = ("pmsm_two_layer_x", "pmsm_contact_x", "pmsm_null_bearing_x")
-"""The bearing-side cases in ``data/concealed`` (1.7 MB each); the others (lubricant loss,
-edge capacitance, the second null, every case without extras) are made with
-``scripts/make_concealed.py --only NAME,... --out DIR``."""
 """Bearing-side cases (issue 14): two-layer film, metallic contact, lubricant dielectric
 loss and Hertzian edge capacitance concealed, and two null cases (``pmsm_null_bearing_all``:
 truth and network without any of the four, all of them decoys), each without and with
 (``_x``) the further measurements; a pair shares truth
-and noise (:attr:`ConcealedCase.draw`). The committed ones are those with the extras
-(``data/concealed``); those without are the same data less the extras
-(``scripts/make_concealed.py --only pmsm_two_layer --out DIR``)."""
+and noise (:attr:`ConcealedCase.draw`). The committed ones (``data/concealed``) are
+:data:`COMMITTED_BEARING`; the others, and those without extras (the same data less the
+extras), come from ``scripts/make_concealed.py --only pmsm_two_layer --out DIR``."""
+COMMITTED_BEARING = ("pmsm_two_layer_x", "pmsm_contact_x", "pmsm_null_bearing_x")
+"""The bearing-side cases in ``data/concealed`` (1.7 MB each); the others (lubricant loss,
+edge capacitance, the second null, every case without extras) are made with
+``scripts/make_concealed.py --only NAME,... --out DIR``."""
 
 
 @dataclass(frozen=True)
