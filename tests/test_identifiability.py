@@ -224,3 +224,35 @@ def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.Mo
     s = 0.5
     g2 = float(dm @ dm) / sig**2
     assert sep(dm, s) == pytest.approx(g2 / (1 + s**2 * g2), rel=1e-9)
+
+
+def test_size_bound_is_the_largest_size_the_present_data_absorb(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Linear reference: the present residual moves by ``x v`` with ``x = ln(p / p_fit)``
+    and nothing refits it (no free parameter), so the refit misses ``t^2 X^2 |v|^2`` at the
+    share ``t`` of the way to the prior (``X = ln(p_prior / p_fit)``). The bound at
+    ``limit`` is ``t* = sqrt(limit) / (X |v|)``; the bisection finds it from below within
+    ``2**-BOUND_STEPS``, and returns None when the prior size is absorbed or the fitted
+    size is not."""
+    import vfmodel.detective.recommend as rc
+
+    v = np.array([3.0, -4.0, 12.0])                 # |v| = 13
+    spec = ParamSpec("p", 1.0, 1e-6, 1e6, "lubricant", "", "")
+    fit = Net((), ParamSet((spec,), (1.0,)))
+    prior = Net((), ParamSet((spec,), (1e3,)))      # X = ln 1000
+    monkeypatch.setattr(rc, "evaluate", lambda fam, applied, p: math.log(p["p"]) * v)
+    present = rc._Present((), np.zeros((v.size, 0)), np.zeros(v.size))
+    cmp = Comparison(("e",), fit, fit, 1, prior, ("p",))
+    limit = 50.0
+    found = rc.size_bound(None, cmp, present, limit)
+    assert found is not None
+    t, net, ref = found
+    t_star = math.sqrt(limit) / (math.log(1e3) * 13.0)      # 0.0788
+    assert t_star - 2.0**-rc.BOUND_STEPS <= t <= t_star
+    assert ref.base <= limit
+    assert net.params["p"] == pytest.approx(1e3**t, rel=1e-12)
+    # the prior size absorbed (limit above the miss at t = 1): the bisection climbs to
+    # 1 - 2**-BOUND_STEPS; the fitted size not absorbed: nothing
+    assert rc.size_bound(None, cmp, present, 1e9)[0] == 1.0 - 2.0**-rc.BOUND_STEPS  # type: ignore[index]
+    shifted = rc._Present((), np.zeros((v.size, 0)), -v)   # already missed at t = 0
+    assert rc.size_bound(None, cmp, shifted, 100.0) is None

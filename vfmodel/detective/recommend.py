@@ -56,6 +56,15 @@ effect of typical size, so the typical-size separation does not apply). Nothing 
 on the would-be data: a refit of the network without the effect could absorb part of the
 difference, so the value is an upper bound of what the measurement would show.
 
+Where the present data exclude the prior size, the size that counts is the largest they
+allow (:func:`size_bound`): the parameters are moved from their fitted values towards
+their prior medians (in ``ln p``) as far as the linearised refit of the network without
+the effect still absorbs the change on the present data (misses them by at most the
+detective's acceptance ``10 + k ln m``), a profile bound at that level. An effect of
+that size would pass unseen on the present data; a measurement that separates it
+(``expected_delta_chi2_after_refit_at_bound``, shaft-to-frame) is worth making, and
+counts for ``decisive`` and the rank. The share of the way is ``size_bound_share``.
+
 Measured on the virtual bench (``data/pmsm40kw``, ``--without lubricant_two_layer``, the
 two-layer film not found): ``impedance:Shaft-Frame`` at 300 rpm ranks first (expected
 Delta chi2 2.9e3 on 101 points). The same bench made with ``--extra-measurements`` shows
@@ -145,6 +154,8 @@ class Recommendation:
     after_refit: float | None = None
     after_refit_at_prior: float | None = None
     prior_size_open: bool = False
+    size_bound: float | None = None
+    after_refit_at_bound: float | None = None
 
     @property
     def rank_value(self) -> float:
@@ -152,10 +163,14 @@ class Recommendation:
         (shaft-to-frame) the larger of it at the fitted size and, when the present data
         cannot exclude it (``prior_size_open``), at the prior's size of the effect's
         undetermined parameters (the data leave the size open, so the measurement is worth
-        making when it would tell a typical-size effect); else the separation at fixed
-        values."""
+        making when it would tell a typical-size effect) or, when they exclude it, at the
+        largest size they allow (``size_bound``: the share of the way from the fitted size
+        to the prior's, :func:`size_bound`; an effect that size would still be missed by
+        the present data, so the measurement is worth making when it would tell it); else
+        the separation at fixed values."""
         return _rank_value(self.expected_delta_chi2, self.after_refit,
-                           self.after_refit_at_prior, self.prior_size_open)
+                           self.after_refit_at_prior, self.prior_size_open,
+                           self.after_refit_at_bound)
 
     def as_json(self) -> dict[str, Any]:
         def f(x: float | None) -> float | None:
@@ -171,7 +186,9 @@ class Recommendation:
                 "network_spread_delta_chi2": f(self.network_spread),
                 "expected_delta_chi2_after_refit": f(self.after_refit),
                 "expected_delta_chi2_after_refit_at_prior": f(self.after_refit_at_prior),
-                "prior_size_open": self.prior_size_open}
+                "prior_size_open": self.prior_size_open,
+                "size_bound_share": f(self.size_bound),
+                "expected_delta_chi2_after_refit_at_bound": f(self.after_refit_at_bound)}
 
 
 def _shaft_frame(family: Any, fit: Net, rpm: float, freq: ArrF) -> ArrC:
@@ -237,11 +254,11 @@ def network_spread(family: Any, fit: Net, names: Sequence[str], cov: ArrF, rpm: 
 
 
 def _rank_value(fixed: float, after: float | None, after_at_prior: float | None,
-                open_: bool) -> float:
+                open_: bool, after_at_bound: float | None = None) -> float:
     """:attr:`Recommendation.rank_value` from its parts."""
     if after is None:
         return fixed
-    return max(after, (after_at_prior or 0.0) if open_ else 0.0)
+    return max(after, (after_at_prior or 0.0) if open_ else 0.0, after_at_bound or 0.0)
 
 
 def _miss(jac: ArrF, d: ArrF) -> float:
@@ -266,21 +283,31 @@ class _Refit:
     base: float
 
 
-def _present_refits(family: Any, nets: Sequence[Net], b: Net,
-                    prior_sigma: Mapping[str, float]) -> list[_Refit]:
-    """:class:`_Refit` of ``b`` towards each of ``nets`` (one Jacobian of ``b``)."""
+@dataclass
+class _Present:
+    """The present data's linearised refit of the network without the effect (``b``): its
+    free names, the Jacobian of its residual with the prior rows below and its residual
+    (:func:`_present`); :meth:`towards` gives the :class:`_Refit` towards a network."""
+
+    names: tuple[str, ...]
+    jac: ArrF
+    rb: ArrF
+
+    def towards(self, family: Any, a: Net) -> _Refit:
+        d = np.concatenate([evaluate(family, a.applied, a.params) - self.rb,
+                            np.zeros(len(self.names))])
+        return _Refit(self.names, self.jac, d, _miss(self.jac, d))
+
+
+def _present(family: Any, b: Net, prior_sigma: Mapping[str, float]) -> _Present:
+    """:class:`_Present` of ``b`` (one Jacobian of ``b``)."""
     from vfmodel.detective.identifiability import jacobian
 
     names = tuple(family.free_names(b.applied, b.params))
     s = np.array([prior_sigma.get(n, math.inf) for n in names], dtype=float)
     pr = np.diag(np.where(np.isfinite(s), 1.0 / s, 0.0))
     jac = np.vstack([jacobian(family, b.applied, b.params, names), pr])
-    rb = evaluate(family, b.applied, b.params)
-    out = []
-    for a in nets:
-        d = np.concatenate([evaluate(family, a.applied, a.params) - rb, np.zeros(len(names))])
-        out.append(_Refit(names, jac, d, _miss(jac, d)))
-    return out
+    return _Present(names, jac, evaluate(family, b.applied, b.params))
 
 
 def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
@@ -290,7 +317,7 @@ def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma:
     to noise-free data of ``a`` (the network with it) on the present data and the
     measurement, each parameter also held by its physical prior (a parameter without one
     moves freely), misses by this much more than the same refit on the present data alone
-    (``present``, :func:`_present_refits`). An effect that the network's other parameters
+    (``present``, :meth:`_Present.towards`). An effect that the network's other parameters
     can mimic on that path (a Foster-equivalent one-port, e.g. an edge capacitance beside
     a free film) separates by ``expected_delta_chi2`` at fixed values but by little here.
     Linearised at ``b``: for large differences it is an estimate, not a bound."""
@@ -307,8 +334,13 @@ def separation(d_log: ArrC, sigma: float) -> float:
     return float(np.sum(np.abs(d_log) ** 2) / sigma**2)
 
 
+def _acceptance(k: int, m: int) -> float:
+    """The detective's acceptance ``10 + k ln m`` (``k`` parameters, ``m`` entries)."""
+    return 10.0 + k * math.log(max(m, 2))
+
+
 def _decisive(delta: float, k: int, m: int) -> bool:
-    return bool(delta > 10.0 + k * math.log(max(m, 2)))
+    return bool(delta > _acceptance(k, m))
 
 
 def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]],
@@ -349,6 +381,44 @@ def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]
     return out
 
 
+BOUND_STEPS = 10
+"""Bisection steps of :func:`size_bound` (the share ``t`` to within ``2**-10``: a factor
+of at most ``1.007`` in each parameter when the prior median is 1000 times the fitted
+value)."""
+
+
+def _toward(fit: Net, at: Net, names: Sequence[str], t: float) -> Net:
+    """``fit`` with ``names`` moved the share ``t`` of the way to their values in ``at``,
+    in ``ln p``."""
+    vals = {n: math.exp((1.0 - t) * math.log(fit.params[n]) + t * math.log(at.params[n]))
+            for n in names}
+    return Net(fit.applied, fit.params.with_values(vals, clip=True))
+
+
+def size_bound(family: Any, cmp: Comparison, present: _Present, limit: float
+               ) -> tuple[float, Net, _Refit] | None:
+    """The largest size of the effect that the present data allow, when they exclude its
+    prior size: the largest share ``t`` in (0, 1) of the way (in ``ln p`` of
+    ``cmp.prior_names``) from the fitted values to their prior medians at which the
+    linearised refit of the network without the effect still absorbs it, i.e. misses the
+    present data by at most ``limit`` (the detective's acceptance, the profile bound at
+    that level), by bisection; with that network and its refit. None when the prior size
+    is not excluded or even the fitted size is not absorbed."""
+    if cmp.with_prior is None or not cmp.prior_names:
+        return None
+    lo, hi = 0.0, 1.0
+    best: tuple[float, Net, _Refit] | None = None
+    for _ in range(BOUND_STEPS):
+        t = 0.5 * (lo + hi)
+        net = _toward(cmp.with_, cmp.with_prior, cmp.prior_names, t)
+        ref = present.towards(family, net)
+        if ref.base <= limit:
+            lo, best = t, (t, net, ref)
+        else:
+            hi = t
+    return best
+
+
 def recommend(family: Any, cmps: Sequence[Comparison], *,
               have: Collection[tuple[str, float]] = (),
               impedance_sigma: float | None = None,
@@ -384,20 +454,32 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
         best: dict[str, Recommendation] = {}
         present: list[_Refit] = []
         nets = [cmp.with_] + ([cmp.with_prior] if cmp.with_prior is not None else [])
+        bound: tuple[float, Net, _Refit] | None = None
+        open_ = False
         for (meas, rpm), (d, n, m, noise) in fitted.items():
-            after: list[float | None] = [None, None]
+            after: list[float | None] = [None, None, None]
             if prior_sigma is not None and meas == "impedance:Shaft-Frame":
                 if not present:
-                    present = _present_refits(family, nets, cmp.without, prior_sigma)
-                for i, (a, pr) in enumerate(zip(nets, present, strict=True)):
+                    pres = _present(family, cmp.without, prior_sigma)
+                    present = [pres.towards(family, a) for a in nets]
+                    if len(present) > 1:
+                        # a typical-size effect counts only where the refit on the present
+                        # data can absorb it (else those data already exclude that size:
+                        # on pmsm_edge the fixture inductance at its prior size, which the
+                        # Shaft-Frame path does not see at all, "separated" by pinning
+                        # what the spectra's refit had used); where they exclude it, the
+                        # largest size they allow counts (size_bound)
+                        limit = _acceptance(cmp.n_params,
+                                            present[1].d.size - len(present[1].names))
+                        open_ = present[1].base <= limit
+                        if not open_:
+                            bound = size_bound(family, cmp, pres, limit)
+                pairs = list(zip(nets, present, strict=True))
+                if bound is not None:
+                    pairs.append((bound[1], bound[2]))
+                for i, (a, pr) in enumerate(pairs):
                     after[i] = refit_separation(family, a, cmp.without, rpm, freq, sig, pr)
-            # a typical-size effect counts only where the refit on the present data can
-            # absorb it (else those data already exclude that size: on pmsm_edge the
-            # fixture inductance at its prior size, which the Shaft-Frame path does not
-            # see at all, "separated" by pinning what the spectra's refit had used)
-            open_ = len(present) > 1 and not _decisive(
-                present[1].base, cmp.n_params, present[1].d.size - len(present[1].names))
-            value = _rank_value(d, after[0], after[1], open_)
+            value = _rank_value(d, after[0], after[1], open_, after[2])
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
@@ -411,7 +493,8 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
             best[meas] = Recommendation(meas, rpm, cmp.separates, d,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
                                         data_prior, cmp.prior_names, ns, after[0], after[1],
-                                        bool(open_))
+                                        bool(open_), None if bound is None else bound[0],
+                                        after[2])
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
 

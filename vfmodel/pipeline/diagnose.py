@@ -202,7 +202,10 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "network with the effect's undetermined parameters at their prior median); "
                 "where given, decisive and the ranking use the larger of the two, the "
                 "latter only when the refit absorbs that size on the present data "
-                "(prior_size_open); "
+                "(prior_size_open), else at the largest size those data allow "
+                "(_at_bound: the undetermined parameters moved towards their prior median, "
+                "in ln p, as far as that refit still misses the present data by at most the "
+                "detective's acceptance; size_bound_share: the share of the way); "
                 "null: not finite or not computed")}
 
 
