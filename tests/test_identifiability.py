@@ -192,6 +192,12 @@ def test_report_names_the_first_decisive_measurement() -> None:
     assert "Identifiability of the effects" in html and "Recommended measurements" in html
     assert "1 identifiable, 1 only through their prior, 0 not identifiable" in html
     assert "measure <b>impedance:Shaft-Frame</b> at 300" in html
+    # decided at the size bound: the sentence gives that separation and says so
+    doc["recommendations"][0].update(expected_delta_chi2=0.47, ranked_delta_chi2=1259.0,
+                                     size_bound_share=0.73,
+                                     expected_delta_chi2_after_refit_at_bound=1259.0)
+    html = diagnose_html(doc, [])
+    assert "(expected Δχ² 1259 for the largest size the present data allow)" in html
 
 
 def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.MonkeyPatch

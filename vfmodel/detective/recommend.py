@@ -188,6 +188,7 @@ class Recommendation:
                 "expected_delta_chi2_after_refit_at_prior": f(self.after_refit_at_prior),
                 "prior_size_open": self.prior_size_open,
                 "size_bound_share": f(self.size_bound),
+                "ranked_delta_chi2": f(self.rank_value),
                 "expected_delta_chi2_after_refit_at_bound": f(self.after_refit_at_bound)}
 
 

@@ -71,9 +71,14 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         msg = f"{E(eff)} is {E(status)} from these data"
         if first is not None and first.get("decisive"):
             sp = first.get("speed_rpm")
+            ranked = first.get("ranked_delta_chi2", first.get("expected_delta_chi2"))
+            at_bound = first.get("size_bound_share") is not None and \
+                ranked == first.get("expected_delta_chi2_after_refit_at_bound")
             msg += (f"; measure <b>{E(first['measurement'])}</b>"
                     + (f" at {num(sp, 'rpm')}" if sp is not None else "")
-                    + f" (expected Δχ² {num(first.get('expected_delta_chi2'), '')})")
+                    + f" (expected Δχ² {num(ranked, '')}"
+                    + (" for the largest size the present data allow" if at_bound else "")
+                    + ")")
         look.append(msg + " (see <a href='#identifiability'>Identifiability</a>).")
     if doc.get("findings"):
         look.append("Compare the before/after overlays and residuals of the channels "
@@ -191,6 +196,8 @@ def _identifiability(doc: dict[str, Any]) -> str:
                  num(r.get("expected_delta_chi2"), "", ["recommendations", str(i),
                                                        "expected_delta_chi2"]),
                  "yes" if r.get("decisive") else "no",
+                 num(r.get("ranked_delta_chi2"), ""),
+                 num(r.get("size_bound_share"), ""),
                  num(r.get("expected_delta_chi2_at_prior"), ""),
                  num(r.get("data_delta_chi2_at_prior"), ""),
                  num(r.get("network_spread_delta_chi2"), ""))
@@ -198,6 +205,7 @@ def _identifiability(doc: dict[str, Any]) -> str:
         out += ["<h2 id='recommendations'>Recommended measurements</h2>",
                 f"<p class='text'>{E(str(doc.get('recommendations_definition', '')))}</p>",
                 table(["measurement", "speed", "separates", "expected Δχ²", "decisive",
+                       "Δχ² ranked by", "share of the way to the prior size (bound)",
                        "Δχ² at prior size", "prior size on present data",
                        "network's own spread (χ²)"], rrows)]
     return "".join(out)
