@@ -31,7 +31,7 @@ def known_model(
         res[n_real + 2 * j + 1] = r.conj()
     d = np.eye(n_ports) * 2.0 + 0.1
     e = np.eye(n_ports) * 1e-7 if with_e else None
-    return RationalModel(poles=poles, residues=res, d=d, e=e, kind=kind)  # type: ignore[arg-type]
+    return RationalModel(poles=poles, residues=res, d=d, e=e, kind=kind)
 
 
 def relative_pole_error(fitted: NDArray[np.complex128], truth: NDArray[np.complex128]) -> float:

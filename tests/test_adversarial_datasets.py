@@ -128,7 +128,8 @@ DATASET_CASES: dict[str, Callable[[Path], tuple[str, ...]]] = {
     "toml_missing": _m(lambda r: (r / TOML).unlink(), "@/dataset.toml"),
     "toml_empty": _m(lambda r: _set_toml(r, ""), "@/dataset.toml"),
     "toml_binary": _m(lambda r: (r / TOML).write_bytes(b"\x00\x01name"), "@/dataset.toml"),
-    "toml_is_dir": _m(lambda r: ((r / TOML).unlink(), (r / TOML).mkdir()), "@/dataset.toml"),
+    "toml_is_dir": _m(lambda r: ((r / TOML).unlink(), (r / TOML).mkdir()),  # type: ignore[func-returns-value]
+                      "@/dataset.toml"),
     "unknown_top_key": _m(lambda r: _set_toml(r, "speed = 3\n" + _toml(r)), "speed"),
     "unknown_recording_key": _m(lambda r: _replace(r, SPEED0, SPEED0 + "\nsped_rpm = 5"),
                                 "sped_rpm"),
@@ -153,9 +154,9 @@ DATASET_CASES: dict[str, Callable[[Path], tuple[str, ...]]] = {
     "impedance_is_dir": _m(lambda r: _replace(r, IMP, '"U-Frame" = "impedance"'),
                            "@/impedance"),
     "impedance_empty_path": _m(lambda r: _replace(r, IMP, '"U-Frame" = ""'), "U-Frame"),
-    "impedance_dotdot": _m(lambda r: (_outside(r), _replace(r, IMP,
+    "impedance_dotdot": _m(lambda r: (_outside(r), _replace(r, IMP,  # type: ignore[func-returns-value]
                            '"U-Frame" = "../outside.csv"')), "../outside.csv"),
-    "impedance_dotdot_inner": _m(lambda r: (_outside(r), _replace(
+    "impedance_dotdot_inner": _m(lambda r: (_outside(r), _replace(  # type: ignore[func-returns-value]
         r, IMP, '"U-Frame" = "impedance/../../outside.csv"')), "outside.csv"),
     "impedance_absolute": _m(lambda r: _replace(r, IMP, f'"U-Frame" = "{_outside(r)}"'),
                              "outside.csv"),
@@ -168,7 +169,8 @@ DATASET_CASES: dict[str, Callable[[Path], tuple[str, ...]]] = {
                                 "U-Frame"),
     "impedance_2port": _m(lambda r: ((r / "impedance" / "two.s2p").write_text(
         "# Hz S RI\n1 0 0 0 0 0 0 0 0\n2 0 0 0 0 0 0 0 0\n3 0 0 0 0 0 0 0 0\n"),
-        _replace(r, IMP, '"U-Frame" = "impedance/two.s2p"')), "@/impedance/two.s2p"),
+        _replace(r, IMP, '"U-Frame" = "impedance/two.s2p"')),  # type: ignore[func-returns-value]
+        "@/impedance/two.s2p"),
     "impedance_bad_csv": _m(lambda r: (r / "impedance" / "U-Frame.csv").write_text(
         "frequency_hz,z_real_ohm,z_imag_ohm\n1,2,nan\n"), "@/impedance/U-Frame.csv"),
     "recording_not_array": _m(lambda r: _set_toml(r, 'recording = "x"\n'), "@/dataset.toml"),

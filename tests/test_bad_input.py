@@ -58,7 +58,7 @@ def test_bad_csv_spectrum(case: str, tmp_path: Path, capsys: pytest.CaptureFixtu
     assert (src.read_bytes() if src.exists() else None) == before  # input unchanged
 
 
-TS_CASES = {
+TS_CASES: dict[str, tuple[bytes | str, str]] = {
     "garbage": (bytes(range(256)) * 8, "binary"),
     "no_option_line": ("! comment\n1 2 3\n", "no Touchstone option line"),
     "bad_data": ("# Hz S RI R 50\n1 2\n2 x y\n", "line 3: not a number"),

@@ -8,9 +8,11 @@ solve (``_solvers.solve_dense``)."""
 from __future__ import annotations
 
 import platform
+from typing import cast
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 import vfmodel.circuit._batched_lu as blu
 import vfmodel.circuit._solvers as solvers
@@ -30,7 +32,7 @@ def test_batched_equals_superlu_per_frequency(seed: int) -> None:
     # h, x and the adjoint lambda within 1e-9 of SuperLU per frequency and of dense LAPACK
     c = random_rlc_network(np.random.default_rng(seed), n_nodes=14, n_elements=40)
     g, cm = c.mna.matrices()
-    s = 2j * np.pi * F
+    s = cast(NDArray[np.complex128], 2j * np.pi * F)
     b = c.mna.input_matrix(["V1"])
     cout = c.mna.output_matrix(["n3", "i(V1)"])
     got = solvers._solve_batched(g, cm, s, b, cout, True)

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import cast
+
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from benches.random_networks import random_rlc_network
-from vfmodel.circuit.mna import MnaSystem
-from vfmodel.circuit.netlist import Circuit
+from vfmodel.circuit.mna import MnaSystem, SolveMethod
+from vfmodel.circuit.netlist import Circuit, Excitation, Probe
 from vfmodel.circuit.poles import network_poles
 from vfmodel.errors import InputError
 
@@ -68,8 +72,8 @@ def test_dense_sparse_modal_agree(seed: int) -> None:
     assert np.max(np.abs(he.h - ref) / scale[..., None]) < 1e-10
 
 
-def _forward_complex_step(mna: MnaSystem, inputs: list,  # type: ignore[type-arg]
-                          outputs: list, v: np.ndarray) -> np.ndarray:  # type: ignore[type-arg]
+def _forward_complex_step(mna: MnaSystem, inputs: Sequence[Excitation],
+                          outputs: Sequence[Probe], v: np.ndarray) -> np.ndarray:
     """Forward (direct) sensitivities dH = -Cout^T A^-1 (dG + s dC) A^-1 B.
 
     dG/dp and dC/dp come from complex steps of the real matrices (exact: no subtraction),
@@ -93,7 +97,7 @@ def _forward_complex_step(mna: MnaSystem, inputs: list,  # type: ignore[type-arg
     return np.stack(jac, axis=-1)
 
 
-def _central_diff(mna: MnaSystem, inputs: list, outputs: list,  # type: ignore[type-arg]
+def _central_diff(mna: MnaSystem, inputs: Sequence[Excitation], outputs: Sequence[Probe],
                   v: np.ndarray) -> np.ndarray:
     """Central differences with one Richardson step: (4 D(h/2) - D(h)) / 3, error O(h^4)."""
     def diff(p: int, h: float) -> np.ndarray:
@@ -111,12 +115,12 @@ def _central_diff(mna: MnaSystem, inputs: list, outputs: list,  # type: ignore[t
 
 
 @pytest.mark.parametrize("method", ["dense", "sparse", "hessenberg", "modal"])
-def test_adjoint_sensitivities_match_forward_complex_step(method: str) -> None:
+def test_adjoint_sensitivities_match_forward_complex_step(method: SolveMethod) -> None:
     c = random_rlc_network(np.random.default_rng(7), n_nodes=8, n_elements=22)
     c = c.add_vccs("ctl.G", "0", "n3", "n1", "0", 1e-3)
     mna = c.mna
-    inputs = ["V1", ("n2", "0")]
-    outputs = ["n4", ("n5", "n6"), "i(V1)"]
+    inputs: list[Excitation] = ["V1", ("n2", "0")]
+    outputs: list[Probe] = ["n4", ("n5", "n6"), "i(V1)"]
     v = mna.values0
     h, jac = mna.response_and_jacobian(F, inputs, outputs, method=method)
     ref = _forward_complex_step(mna, inputs, outputs, v)
@@ -238,7 +242,7 @@ def test_sparse_factorisation_fallback_gives_the_same_solution(
 
     c = random_rlc_network(np.random.default_rng(11), n_nodes=9, n_elements=24)
     g, cm = c.mna.matrices()
-    s = 2j * np.pi * F
+    s = cast(NDArray[np.complex128], 2j * np.pi * F)
     b = c.mna.input_matrix(["V1"])
     cout = c.mna.output_matrix(["n3", "i(V1)"])
     ref = solvers.solve_dense(g, cm, s, b, cout, True)

@@ -72,7 +72,7 @@ def test_synthesis_reproduces_model(seed: int, kind: str, n: int, form: str) -> 
 
 def test_foster_elements_positive_for_rc_model() -> None:
     # Z = R0 + sum r/(s - p), r > 0, p < 0: a chain of positive parallel RC blocks
-    model = RationalModel(np.array([-1e4, -1e6]), np.array([2e6, 5e7]), d=[[3.0]], kind="Z")
+    model = RationalModel(np.array([-1e4, -1e6]), np.array([2e6, 5e7]), d=[[3.0]], kind="Z")  # type: ignore[arg-type]
     c = synthesize(model)
     kinds = sorted((e.kind, round(e.value, 12)) for e in c.elements)
     # C = 1/r, R = -r/p
@@ -94,7 +94,7 @@ def test_subckt_text_has_contract_pins() -> None:
 
 
 def test_synthesis_errors() -> None:
-    model = RationalModel(np.array([-1e4]), np.ones((1, 2, 1)), kind="H")
+    model = RationalModel(np.array([-1e4]), np.ones((1, 2, 1)), kind="H")  # type: ignore[arg-type]
     with pytest.raises(CircuitError, match="square"):
         synthesize(model)
     pair = RationalModel(np.array([-1e3 + 1e5j, -1e3 - 1e5j]), np.array([1e4j, -1e4j]),

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from vfmodel.greybox.params import ParamSet
 
 ROOT = Path(__file__).resolve().parents[1]
 DIR = ROOT / "data" / "concealed"
-CASES: dict[str, dict[str, object]] = json.loads((DIR / "cases.json").read_text())
+CASES: dict[str, dict[str, Any]] = json.loads((DIR / "cases.json").read_text())
 BY_NAME = {c.name: c for c in BEARING_CASES}
 COMMITTED = list(COMMITTED_BEARING)
 SIG = BenchConfig().z_noise / np.sqrt(2)          # noise of each component of log Z
@@ -60,7 +61,7 @@ def test_twin_without_extras_is_the_same_data() -> None:
 
 def test_committed_case_regenerates() -> None:
     name = "pmsm_two_layer_x"
-    d = generate(BY_NAME[name], seed=int(CASES[name]["seed"]))      # type: ignore[arg-type]
+    d = generate(BY_NAME[name], seed=int(CASES[name]["seed"]))
     ds = read_dataset(DIR / name)
     # rounding of the network solves only (see test_concealed_data)
     np.testing.assert_allclose(ds.further_impedance["Shaft-Frame"].values[:, 0, 0],

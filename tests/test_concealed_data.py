@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -26,7 +27,7 @@ from vfmodel.greybox.params import ParamSet
 
 ROOT = Path(__file__).resolve().parents[1]
 DIR = ROOT / "data" / "concealed"
-CASES: dict[str, dict[str, object]] = json.loads((DIR / "cases.json").read_text())
+CASES: dict[str, dict[str, Any]] = json.loads((DIR / "cases.json").read_text())
 PMSM = [c for c in PMSM_CASES]
 BY_NAME = {c.name: c for c in PMSM}
 CFG = BenchConfig()
@@ -124,7 +125,7 @@ def test_null_case_has_model_structure(name: str) -> None:
 
 def test_regeneration_matches_committed() -> None:
     name = next(c.name for c in PMSM if c.effect is not None)
-    d = generate(BY_NAME[name], seed=int(CASES[name]["seed"]))      # type: ignore[arg-type]
+    d = generate(BY_NAME[name], seed=int(CASES[name]["seed"]))
     ds = read_dataset(DIR / name)
     for t, z in d.spectra.items():
         # same seed, same noise draws; only floating-point rounding of the network solves

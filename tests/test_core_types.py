@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import pytest
 import skrf
+from numpy.typing import NDArray
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
@@ -20,7 +23,7 @@ def _random_z(n: int, n_f: int = 7, seed: int = 0) -> np.ndarray:
 @pytest.mark.parametrize("n", [1, 2, 3, 4])
 def test_conversions_match_scikit_rf(n: int) -> None:
     z = _random_z(n)
-    d = FrequencyData(np.arange(1, 8) * 1e6, z, "Z")
+    d = FrequencyData(cast(NDArray[np.float64], np.arange(1, 8) * 1e6), z, "Z")
     # reference: scikit-rf's own conversion formulas at z0 = 50 ohm
     s_ref = skrf.network.z2s(z, 50.0)
     y_ref = skrf.network.z2y(z)
@@ -33,7 +36,7 @@ def test_conversions_match_scikit_rf(n: int) -> None:
 
 def test_network_round_trip() -> None:
     z = _random_z(3)
-    d = FrequencyData(np.arange(1, 8) * 1e6, z, "Z")
+    d = FrequencyData(cast(NDArray[np.float64], np.arange(1, 8) * 1e6), z, "Z")
     net = d.to_network(z0=50.0)
     assert np.max(np.abs(net.z - z)) / np.max(np.abs(z)) < 1e-12
     back = FrequencyData.from_network(net, kind="Z")
@@ -83,7 +86,7 @@ def test_rational_model_requires_conjugate_pairs() -> None:
 
 def test_rational_model_json_round_trip() -> None:
     m = RationalModel(np.array([-2.0, -1 + 5j, -1 - 5j]), np.array([1.0, 2 + 1j, 2 - 1j]),
-                      d=[[0.5]], e=[[1e-9]], kind="Z")
+                      d=[[0.5]], e=[[1e-9]], kind="Z")  # type: ignore[arg-type]
     back = RationalModel.from_json_dict(m.to_json_dict())
     f = np.logspace(-1, 1, 9)
     assert np.max(np.abs(back(f) - m(f))) == 0.0

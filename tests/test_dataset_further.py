@@ -72,7 +72,7 @@ lubricant_permittivity = 2.4
     data = np.vstack([rec.data, 0.9 * rec.data[3], rng.normal(0, 0.1, rec.n_samples)])
     arrays = dict(zip((*rec.channels, "u_B_DE", "i_CM"), data, strict=True))
     with open(root / "recordings/rpm0100.npz", "wb") as fh:
-        np.savez(fh, fs=rec.fs, **arrays)  # type: ignore[arg-type]
+        np.savez(fh, fs=rec.fs, **arrays)
     return root
 
 
@@ -90,6 +90,7 @@ def test_further_measurements_are_carried_apart(ds_root: Path) -> None:
     r0, r1 = ds.recordings
     assert r0.extra_channels == () and r0.bearing_de is None
     assert r1.extra_channels == ("u_B_DE", "i_CM")
+    assert r1.bearing_de is not None
     np.testing.assert_allclose(r1.bearing_de, 0.9 * r1.bearing, rtol=1e-12)
     assert r1.channels[:4] == ("u_U", "u_V", "u_W", "u_B") and ds.has_further_measurements
     assert ds.machine is not None and ds.machine.air_gap_m == 0.0008 and ds.machine.slots == 48

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any, cast
 
 import numpy as np
 import pytest
 
 from vfmodel.detective.evidence import implausible_evidence
 from vfmodel.detective.fit import refit
-from vfmodel.detective.problem import Candidate
+from vfmodel.detective.problem import Candidate, Family
 from vfmodel.greybox.params import ParamSet, ParamSpec
 from vfmodel.greybox.priors import Prior, parameter_priors
 
@@ -52,7 +53,7 @@ class _Linear:
 
 def test_map_refit_is_the_gaussian_posterior() -> None:
     pri = {"a": _prior("a", 2.0, 1.5), "b": _prior("b", 2.5, 3.0), "c": _prior("c", 4.0, 2.0)}
-    fit = refit(_Linear(pri), (), P0)
+    fit = refit(cast(Family, _Linear(pri)), (), P0)
     aw = A / SIG[:, None]
     prec = np.diag([1 / math.log(pri[n].gsd) ** 2 for n in NAMES])
     m = np.log([pri[n].median for n in NAMES])
@@ -70,7 +71,7 @@ def test_map_refit_is_the_gaussian_posterior() -> None:
 
 
 def test_without_priors_the_unseen_direction_stays_unknown() -> None:
-    fit = refit(_Linear(None), (), P0)
+    fit = refit(cast(Family, _Linear(None)), (), P0)
     assert fit.prior_chi2 == 0.0
     # ln a - ln b is not seen by the data: both stds infinite (pseudo-inverse), c finite
     assert not math.isfinite(fit.rel_std["a"]) or fit.rel_std["a"] > 1e3
@@ -83,7 +84,7 @@ def test_a_range_prior_acts_only_outside_its_bounds() -> None:
     rng = Prior("a", "range", math.sqrt(lo * hi), math.exp(math.log(hi / lo) / math.sqrt(12)),
                 lo, hi, "physics", "test")
     pri = {"a": rng, "b": _prior("b", 1.0, 1.2), "c": _prior("c", 4.0, 2.0)}
-    fit = refit(_Linear(pri), (), P0)
+    fit = refit(cast(Family, _Linear(pri)), (), P0)
     # b pinned near 1 by its prior, so a ~ 6 (inside the range): the range costs nothing
     assert lo < fit.params["a"] < hi
     assert fit.params["a"] * fit.params["b"] == pytest.approx(6.0 * math.exp(0.01), rel=2e-3)
@@ -95,7 +96,7 @@ PRI_100 = parameter_priors(None, 100.0)
 
 
 def _ev(values: dict[str, float], found: dict[str, str] | None = None,
-        rejected: dict[str, str] | None = None) -> list[dict[str, object]]:
+        rejected: dict[str, str] | None = None) -> list[dict[str, Any]]:
     pri = {n: (PRI_100[n.split("@")[0]] if "@" in n else PRI[n]) for n in values}
     return implausible_evidence(values, pri, frozenset({"lubricant_two_layer"}),
                                 found or {}, rejected or {})
@@ -108,7 +109,7 @@ def test_a_shorted_standstill_film_points_at_the_metallic_contact() -> None:
              rejected={"metallic_contact": "not supported by the data"})
     assert [e["parameter"] for e in ev] == ["lubricant.C_1"]
     assert ev[0]["z_sigma"] == pytest.approx(5.0, rel=1e-9)
-    (ex,) = ev[0]["explained_by"]          # type: ignore[misc]
+    (ex,) = ev[0]["explained_by"]
     assert ex["effect"] == "metallic_contact"
     assert ex["outcome"] == "rejected: not supported by the data"
 
@@ -117,7 +118,7 @@ def test_a_large_film_at_speed_points_at_the_bearing_capacitances_not_the_contac
     c1 = PRI_100["lubricant.C_1"]
     ev = _ev({"lubricant.C_1@100rpm": c1.median * c1.gsd**4},
              found={"hertzian_edge_capacitance": "bearing.contact"})
-    effects = {e["effect"]: e["outcome"] for e in ev[0]["explained_by"]}  # type: ignore
+    effects = {e["effect"]: e["outcome"] for e in ev[0]["explained_by"]}
     assert effects == {"hertzian_edge_capacitance": "found at bearing.contact",
                        "lubricant_two_layer": "already in the network"}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
@@ -19,6 +19,7 @@ from tests.conftest import REPO
 from vfmodel.circuit import transfer
 from vfmodel.cli.main import main
 from vfmodel.detective.fit import evaluate
+from vfmodel.detective.pmsm import PmsmFamily
 from vfmodel.detective.problem import channel_slices
 from vfmodel.detective.windows import time_windows
 from vfmodel.pipeline.diagnose import DiagnoseResult, run_diagnose
@@ -166,7 +167,8 @@ def test_base_lubricant_does_not_act_while_turning(null: DiagnoseResult) -> None
     records of data/pmsm40kw --without metallic_contact (measured before the fix)."""
     from dataclasses import replace
 
-    fam = replace(null.family, base_effects=null.family.base_effects - {"metallic_contact"},
+    fam_null = cast(PmsmFamily, null.family)
+    fam = replace(fam_null, base_effects=fam_null.base_effects - {"metallic_contact"},
                   _memo={}, _names={}, _lmaps={})
     p = null.diagnosis.final.params
     names = ("lubricant.C_1", "lubricant.R_1")
@@ -189,7 +191,7 @@ def test_shaft_frame_channels_residual_and_jacobian(null: DiagnoseResult) -> Non
     from vfmodel.detective.problem import Channel
     from vfmodel.detective.shaft_frame import PortTerm
 
-    fam0 = null.family
+    fam0 = cast(PmsmFamily, null.family)
     p = null.diagnosis.final.params
     rpm = next(pr.speed_rpm for pr in fam0.preps if pr.speed_rpm > 0)
     f = np.geomspace(1e3, 1e7, 31)

@@ -10,12 +10,15 @@ from __future__ import annotations
 import json
 import warnings
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pytest
 import skrf
+from numpy.typing import NDArray
 
 from benches.skrf_reference import skrf_auto_fit_error
+from vfmodel._choices import Kind
 from vfmodel.cli.main import main as cli_main
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.io_spectrum import read_spectrum
@@ -61,7 +64,7 @@ def test_constant_file_gives_pole_free_model(name: str, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("kind", ["S", "Z"])
-def test_pole_free_model_enforced_by_the_nearest_passive_constant(kind: str) -> None:
+def test_pole_free_model_enforced_by_the_nearest_passive_constant(kind: Kind) -> None:
     # analytic reference: a rotated diag(1 + 1e-9, 0.5) (S) or diag(-1e-9, 2) plus a
     # lossless antisymmetric part (Z) is made passive by moving the one offending singular
     # value (eigenvalue) by 1e-9: the change is 1e-9 in the 2-norm, not the margin (1e-6)
@@ -124,7 +127,7 @@ def test_certificate_agrees_with_dense_sampling(name: str) -> None:
     f = data.freq_hz
     dense = _dense_min_margin(model, f[0], f[-1])
     for method in ("auto", "sampling"):
-        check = check_passivity(model, method=method)  # type: ignore[arg-type]
+        check = check_passivity(model, method=method)
         # wr2p2,line1: sigma_max 1.000335 from 0 Hz up was certified passive before
         assert check.passive == (dense >= -1e-12), (method, dense, check)
     passive, check = enforce_passivity(model, data)
@@ -419,6 +422,7 @@ def test_values_whose_squares_overflow_are_refused(tmp_path: Path) -> None:
     assert cli_main(["fit", str(path), "--out", str(tmp_path / "out")]) == 2
     assert not (tmp_path / "out" / "model.json").exists()
     assert cli_main(["info", str(path), "--json"]) == 2
-    big = FrequencyData(f, 1e90 * np.array([1.0, -1 + 1j, 1.0, 0.5, 0.3 + 0.1j]), kind="Z")
+    big = FrequencyData(f, cast(NDArray[np.complex128],
+                               1e90 * np.array([1.0, -1 + 1j, 1.0, 0.5, 0.3 + 0.1j])), kind="Z")
     model, _ = vector_fit(big)
     assert np.all(np.isfinite(model(f)))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import pytest
 
@@ -34,7 +36,7 @@ def test_rl_ladder_matches_recursive_formula() -> None:
                      n_rungs=n), "a", F)
     rs, ls = ladder_values(r_dc, l_int, rho, n)
     w = 2j * np.pi * F
-    inner = rs[n - 1] + w * ls[n - 1]
+    inner: np.ndarray = rs[n - 1] + w * ls[n - 1]
     for k in range(n - 2, -1, -1):
         inner = rs[k] + (w * ls[k] * inner) / (w * ls[k] + inner)
     ref = w * l_ext + inner
@@ -55,7 +57,7 @@ def test_rl_plain_and_insulation_analytic() -> None:
     c, r, k, tau = 1e-9, 1e8, 0.2, 2e-6
     z = _z(insulation("ins", "a", "0", c=c, r_ins=r, loss=True, k_d=k, tau_d=tau), "a", F)
     c_d = k * c
-    ref = 1 / (1 / r + w * c + 1 / (tau / c_d + 1 / (w * c_d)))
+    ref: np.ndarray = 1 / (1 / r + w * c + 1 / (tau / c_d + 1 / (w * c_d)))
     assert np.max(np.abs(z - ref) / np.abs(ref)) < 1e-10
     z = _z(insulation("ins", "a", "0", c=c, r_ins=r, loss=False), "a", F)
     ref = 1 / (1 / r + w * c)
@@ -134,11 +136,12 @@ def test_each_effect_toggles_its_elements(effect: str) -> None:
     added = full - less
     assert _MARKERS[effect] in added
     # every added element belongs to a location the vocabulary names for the effect
-    prefixes = {"winding_skin_effect": "winding.", "insulation_dielectric_loss": ("insulation",
-                "airgap"), "frame_skin_effect": "frame.", "shaft_skin_effect": "shaft.",
-                "ball_skin_effect": "bearing.", "lubricant_dielectric_loss": "bearing.",
-                "lubricant_two_layer": "bearing.", "hertzian_edge_capacitance": "bearing.",
-                "metallic_contact": "bearing."}[effect]
+    prefixes = cast(str | tuple[str, ...], {
+        "winding_skin_effect": "winding.", "insulation_dielectric_loss": ("insulation", "airgap"),
+        "frame_skin_effect": "frame.", "shaft_skin_effect": "shaft.",
+        "ball_skin_effect": "bearing.", "lubricant_dielectric_loss": "bearing.",
+        "lubricant_two_layer": "bearing.", "hertzian_edge_capacitance": "bearing.",
+        "metallic_contact": "bearing."}[effect])
     assert all(n.startswith(prefixes) for n in added)
     assert effect in EFFECT_INFO
 

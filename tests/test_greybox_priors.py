@@ -54,14 +54,14 @@ def test_hertz_circle_matches_textbook() -> None:
 def test_hamrock_dowson_exponents_and_value() -> None:
     """h_c ~ u^0.67 eta^0.67 Q^-0.067 and the formula's value typed out by hand."""
     args = dict(eta0=0.02, u=1.0, alpha=2e-8, q_n=100.0, r_x=5e-3, k=5.0, e_eff=2.3e11)
-    h = central_film_thickness(**args)  # type: ignore[arg-type]
+    h = central_film_thickness(**args)
     hand = 5e-3 * 2.69 * (0.02 * 1.0 / (2.3e11 * 5e-3)) ** 0.67 * (2e-8 * 2.3e11) ** 0.53 \
         * (100.0 / (2.3e11 * 25e-6)) ** -0.067 * (1 - 0.61 * math.exp(-0.73 * 5.0))
     assert h == pytest.approx(hand, rel=1e-12)
     assert 0.05e-6 < h < 1e-6  # an EHL film of tens to hundreds of nm
-    assert central_film_thickness(**{**args, "u": 3.0}) / h == pytest.approx(  # type: ignore[arg-type]
+    assert central_film_thickness(**{**args, "u": 3.0}) / h == pytest.approx(
         3**0.67, rel=1e-12)
-    assert central_film_thickness(**{**args, "q_n": 800.0}) / h == pytest.approx(  # type: ignore[arg-type]
+    assert central_film_thickness(**{**args, "q_n": 800.0}) / h == pytest.approx(
         8**-0.067, rel=1e-12)
 
 

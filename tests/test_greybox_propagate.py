@@ -4,8 +4,10 @@ covariance against the exact covariance of a linear two-step estimator."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from vfmodel.greybox.identify import StageReport
 from vfmodel.greybox.params import ParamSet, ParamSpec
@@ -36,7 +38,7 @@ def test_two_step_covariance_matches_the_linear_estimator() -> None:
     q = rng.standard_normal((3, 3))
     sig_m = q @ q.T * 0.01                             # covariance of the machine stage
     ata_inv = np.linalg.inv(a.T @ a)
-    cond = sig2 * ata_inv
+    cond = cast(NDArray[np.float64], sig2 * ata_inv)
     params = ParamSet(tuple(ParamSpec(n, 1.0, 1e-3, 1e3, n.split(".")[0], "", "")
                             for n in LUB + MACH), (1.0,) * 5)
     # as fit_stage reports it: chi2_red times (J^T J)^-1 (here chi2_red = the noise
@@ -73,7 +75,7 @@ def test_unseen_machine_direction_leaves_what_moves_with_it_unbounded() -> None:
     params = ParamSet(tuple(ParamSpec(n, 1.0, 1e-3, 1e3, "x", "", "") for n in LUB + MACH),
                       (1.0,) * 5)
     lub_rep = StageReport("lubricant 100 rpm", LUB, 50, 1.0, 5, 1, {},
-                          np.linalg.inv(a.T @ a))
+                          cast(NDArray[np.float64], np.linalg.inv(a.T @ a)))
     sig_m = np.diag([np.inf, 0.01, 0.01])               # C_wr not seen by the machine stage
     out = with_machine_uncertainty(_Linear(a, b), params, lub_rep,
                                    StageReport("standstill 0 rpm", MACH, 50, 1.0, 5, 1, {},

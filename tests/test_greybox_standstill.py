@@ -158,7 +158,7 @@ def test_standstill_peak_on_small_bench(small_bench: tuple[Path, dict[str, objec
                        {"standstill_fit": "h1", "standstill_weighting": "diagonal",
                         "input_noise": False,
                         "hold_standstill": ()})):
-        ident = identify(data, sections=(2,), max_nfev=30, **kw)  # type: ignore[arg-type]
+        ident = identify(data, sections=(2,), max_nfev=30, **kw)
         sf = ident.speeds[0]
         assert sf.state == "standstill"
         prep = sf.term.prep

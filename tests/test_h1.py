@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import numpy as np
 import pytest
@@ -141,7 +142,7 @@ def test_bad_recordings_name_the_channel() -> None:
     rng = np.random.default_rng(6)
     x = pwm_inputs(4096, rng)
     y = output_of(x)
-    names = dict(input_names=["u_U", "u_V", "u_W"], output_names=["u_B"])
+    names: dict[str, Any] = dict(input_names=["u_U", "u_V", "u_W"], output_names=["u_B"])
     xn = x.copy()
     xn[1, 100] = np.nan
     with pytest.raises(InputError, match=r"u_V.*NaN"):

@@ -8,9 +8,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from vfmodel.detective.fit import FitResult
 from vfmodel.detective.identifiability import (
@@ -175,7 +177,7 @@ def test_shaft_frame_sensitivity_matches_differences_and_spread_is_the_quadratic
 def test_report_names_the_first_decisive_measurement() -> None:
     from vfmodel.report.diagnose_html import diagnose_html
 
-    doc = {"model": "m", "sentence": "s", "mismatch_found": True, "findings": [],
+    doc: dict[str, Any] = {"model": "m", "sentence": "s", "mismatch_found": True, "findings": [],
            "identifiability": {
                "effects": {"lubricant_two_layer": "not-identifiable"},
                "parameters": {"a": "identifiable", "b": "prior-only"},
@@ -222,9 +224,9 @@ def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.Mo
                             lambda fam, net, names, rpm, f: direction[:, None] + 0j)
         row = np.zeros((1, 1)) if prior_s is None else np.full((1, 1), 1.0 / prior_s)
         present = rc._Refit(("p",), row, np.zeros(1), 0.0)
-        return rc.refit_separation(None, "a", "b", 0.0, freq, sig, present)  # type: ignore
+        return rc.refit_separation(None, "a", "b", 0.0, freq, sig, present)  # type: ignore[arg-type]
 
-    full = rc.separation(dm + 0j, sig)
+    full = rc.separation(cast(NDArray[np.complex128], dm + 0j), sig)
     assert sep(dm, None) == pytest.approx(0.0, abs=1e-9 * full)
     assert sep(ortho, None) == pytest.approx(full, rel=1e-9)
     s = 0.5

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pytest
 import skrf
+from numpy.typing import NDArray
 
 from tests.conftest import TOUCHSTONE_DIR, rlc_impedance
 from vfmodel.core.frequency_data import FrequencyData
@@ -48,7 +50,7 @@ def test_touchstone_csv_touchstone_round_trip(tmp_path: Path, name: str) -> None
 def test_z_touchstone_read_back_by_scikit_rf(tmp_path: Path, n: int) -> None:
     rng = np.random.default_rng(n)
     z = rng.normal(size=(9, n, n)) + 1j * rng.normal(size=(9, n, n)) + 10 * np.eye(n)
-    data = FrequencyData(np.linspace(1e3, 1e6, 9), z, "Z")
+    data = FrequencyData(np.linspace(1e3, 1e6, 9), cast(NDArray[np.complex128], z), "Z")
     path = tmp_path / f"z.s{n}p"
     write_spectrum(path, data)
     net = skrf.Network(str(path))

@@ -101,7 +101,8 @@ def _motor_impedance(f: np.ndarray) -> np.ndarray:
     return 1 / (s * 200e-12 + 1 / z)
 
 
-def _absorbed_energy(model: RationalModel, t: np.ndarray, i: np.ndarray) -> np.ndarray:
+def _absorbed_energy(model: RationalModel, t: np.ndarray, i: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Cumulative int v i dt (J) of the Z model driven by current i (zero initial state)."""
     ss = model.to_state_space()
     assert np.all(ss.e == 0)

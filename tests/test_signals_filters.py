@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from typing import cast
 
 import numpy as np
 import pytest
@@ -22,7 +23,8 @@ FS = 100e6
 
 def _tones(n: int, freqs_amps: list[tuple[float, float]]) -> np.ndarray:
     t = np.arange(n) / FS
-    return sum(a * np.cos(2 * np.pi * f * t + 0.3 * i) for i, (f, a) in enumerate(freqs_amps))
+    return cast(np.ndarray,
+                sum(a * np.cos(2 * np.pi * f * t + 0.3 * i) for i, (f, a) in enumerate(freqs_amps)))
 
 
 def test_brickwall_keeps_below_and_removes_above_cutoff() -> None:

@@ -109,7 +109,7 @@ def test_weightings_recover_exact_model(weighting: str) -> None:
     truth = known_model(2, 1, 3, seed=2)
     data = FrequencyData(FREQ, truth(FREQ), kind="Z")
     w = np.geomspace(1.0, 10.0, FREQ.size) if weighting == "array" else weighting
-    model, _ = vector_fit(data, truth.n_poles, weighting=w, fit_e=True)  # type: ignore[arg-type]
+    model, _ = vector_fit(data, truth.n_poles, weighting=w, fit_e=True)
     assert relative_pole_error(model.poles, truth.poles) < 1e-8
 
 
@@ -183,9 +183,9 @@ def test_single_frequency() -> None:
 def test_bad_arguments(kwargs: dict[str, object], match: str) -> None:
     data = FrequencyData(FREQ, 1 / (1 + 1j * FREQ / 1e5), kind="H")
     with pytest.raises(InputError, match=match):
-        vector_fit(data, **kwargs)  # type: ignore[arg-type]
+        vector_fit(data, **kwargs)
 
 
 def test_not_frequency_data() -> None:
     with pytest.raises(InputError, match=r"FrequencyData, a skrf\.Network or a path"):
-        vector_fit(np.ones(10), 2)  # type: ignore[arg-type]
+        vector_fit(np.ones(10), 2)

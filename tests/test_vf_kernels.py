@@ -3,7 +3,10 @@ forms (the reference: the same algebra written out with numpy.linalg)."""
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
+from numpy.typing import NDArray
 
 from vfmodel.fitting import _relocate
 from vfmodel.fitting import _vf_core as core
@@ -12,7 +15,7 @@ from vfmodel.fitting import _vf_core as core
 def _problem(anchors: bool = True) -> tuple[core.Problem, np.ndarray]:
     rng = np.random.default_rng(7)
     k, m = 60, 4
-    s = 1j * np.linspace(0.02, 1.0, k)
+    s = cast(NDArray[np.complex128], 1j * np.linspace(0.02, 1.0, k))
     h = rng.standard_normal((k, m)) + 1j * rng.standard_normal((k, m))
     w = np.ones((k, 1))
     anc = None
