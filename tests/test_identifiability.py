@@ -200,6 +200,12 @@ def test_report_names_the_first_decisive_measurement() -> None:
                                      expected_delta_chi2_after_refit_at_bound=1259.0)
     html = diagnose_html(doc, [])
     assert "(expected Δχ² 1259 for the largest size the present data allow)" in html
+    # no decisive measurement: the sentence names what mimics the effect
+    doc["recommendations"][0].update(decisive=False, absorbed_by=[
+        {"parameter": "bearing.C_air", "delta_ln_p": 0.25}])
+    html = diagnose_html(doc, [])
+    assert "no offered measurement separates it" in html
+    assert "would still mimic it by moving bearing.C_air (0.25 in ln p)" in html
 
 
 def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.MonkeyPatch
@@ -232,6 +238,11 @@ def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.Mo
     s = 0.5
     g2 = float(dm @ dm) / sig**2
     assert sep(dm, s) == pytest.approx(g2 / (1 + s**2 * g2), rel=1e-9)
+    # what absorbs it (direction dm, no prior): the one parameter, moved by exactly the
+    # difference (ln p + 1)
+    present = rc._Refit(("p",), np.zeros((1, 1)), np.zeros(1), 0.0)
+    _, moves = rc.refit_moves(None, "a", "b", 0.0, freq, sig, present)  # type: ignore[arg-type]
+    assert moves[0][0] == "p" and moves[0][1] == pytest.approx(1.0, rel=1e-9)
 
 
 def test_size_bound_is_the_largest_size_the_present_data_absorb(

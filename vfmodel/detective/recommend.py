@@ -65,6 +65,12 @@ that size would pass unseen on the present data; a measurement that separates it
 (``expected_delta_chi2_after_refit_at_bound``, shaft-to-frame) is worth making, and
 counts for ``decisive`` and the rank. The share of the way is ``size_bound_share``.
 
+Where no offered measurement separates an effect, the reason is what mimics it: each
+Shaft-Frame recommendation carries ``absorbed_by``, the parameters of the network without
+the effect that its refit (present data and the measurement, :func:`refit_moves`) moves
+most, with their change of ``ln p``, at the size the rank is taken from; the report names
+them for an effect no measurement settles.
+
 Measured on the virtual bench (``data/pmsm40kw``, ``--without lubricant_two_layer``, the
 two-layer film not found): ``impedance:Shaft-Frame`` at 300 rpm ranks first (expected
 Delta chi2 2.9e3 on 101 points). The same bench made with ``--extra-measurements`` shows
@@ -156,6 +162,7 @@ class Recommendation:
     prior_size_open: bool = False
     size_bound: float | None = None
     after_refit_at_bound: float | None = None
+    absorbed_by: tuple[tuple[str, float], ...] = ()
 
     @property
     def rank_value(self) -> float:
@@ -189,6 +196,8 @@ class Recommendation:
                 "prior_size_open": self.prior_size_open,
                 "size_bound_share": f(self.size_bound),
                 "ranked_delta_chi2": f(self.rank_value),
+                "absorbed_by": [{"parameter": n, "delta_ln_p": f(x)}
+                                for n, x in self.absorbed_by],
                 "expected_delta_chi2_after_refit_at_bound": f(self.after_refit_at_bound)}
 
 
@@ -262,13 +271,19 @@ def _rank_value(fixed: float, after: float | None, after_at_prior: float | None,
     return max(after, (after_at_prior or 0.0) if open_ else 0.0, after_at_bound or 0.0)
 
 
-def _miss(jac: ArrF, d: ArrF) -> float:
-    """``min_x |d - J x|^2`` (least squares; unseen directions do not help)."""
+def _solve(jac: ArrF, d: ArrF) -> tuple[float, ArrF]:
+    """``min_x |d - J x|^2`` and its ``x`` (least squares; unseen directions do not
+    help)."""
     if jac.shape[1] == 0:
-        return float(d @ d)
+        return float(d @ d), np.zeros(0)
     x = np.linalg.lstsq(jac, d, rcond=1e-10)[0]
     r = d - jac @ x
-    return float(r @ r)
+    return float(r @ r), np.asarray(x, dtype=float)
+
+
+def _miss(jac: ArrF, d: ArrF) -> float:
+    """``min_x |d - J x|^2`` (:func:`_solve`)."""
+    return _solve(jac, d)[0]
 
 
 @dataclass
@@ -311,6 +326,10 @@ def _present(family: Any, b: Net, prior_sigma: Mapping[str, float]) -> _Present:
     return _Present(names, jac, evaluate(family, b.applied, b.params))
 
 
+ABSORBING = 3
+"""How many parameters :func:`refit_moves` names (the largest moves)."""
+
+
 def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
                      present: _Refit) -> float:
     """Expected chi-square of a shaft-to-frame measurement at ``rpm`` that the network
@@ -322,11 +341,23 @@ def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma:
     can mimic on that path (a Foster-equivalent one-port, e.g. an edge capacitance beside
     a free film) separates by ``expected_delta_chi2`` at fixed values but by little here.
     Linearised at ``b``: for large differences it is an estimate, not a bound."""
+    return refit_moves(family, a, b, rpm, freq, sigma, present)[0]
+
+
+def refit_moves(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
+                present: _Refit) -> tuple[float, tuple[tuple[str, float], ...]]:
+    """:func:`refit_separation` and how that refit absorbs the effect: the
+    :data:`ABSORBING` parameters of ``b`` it moves most, with their change of ``ln p``
+    (largest ``|change|`` first; what mimics the effect on the present data and the
+    measurement)."""
     g = _dlnz_dlnp(family, b, present.names, rpm, freq) / sigma
     dm = np.log(_shaft_frame(family, a, rpm, freq) / _shaft_frame(family, b, rpm, freq))
     jac = np.vstack([present.jac, g.real, g.imag])
     d = np.concatenate([present.d, dm.real / sigma, dm.imag / sigma])
-    return _miss(jac, d) - present.base
+    miss, x = _solve(jac, d)
+    top = np.argsort(-np.abs(x))[:ABSORBING]
+    return miss - present.base, tuple((present.names[i], float(x[i])) for i in top
+                                      if x[i] != 0.0)
 
 
 def separation(d_log: ArrC, sigma: float) -> float:
@@ -459,6 +490,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
         open_ = False
         for (meas, rpm), (d, n, m, noise) in fitted.items():
             after: list[float | None] = [None, None, None]
+            moves: list[tuple[tuple[str, float], ...]] = [(), (), ()]
             if prior_sigma is not None and meas == "impedance:Shaft-Frame":
                 if not present:
                     pres = _present(family, cmp.without, prior_sigma)
@@ -479,8 +511,13 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                 if bound is not None:
                     pairs.append((bound[1], bound[2]))
                 for i, (a, pr) in enumerate(pairs):
-                    after[i] = refit_separation(family, a, cmp.without, rpm, freq, sig, pr)
+                    after[i], moves[i] = refit_moves(family, a, cmp.without, rpm, freq, sig,
+                                                     pr)
             value = _rank_value(d, after[0], after[1], open_, after[2])
+            # the refit that the rank is taken from: how the network mimics that size
+            counted = [v if v is not None and (i != 1 or open_) else -math.inf
+                       for i, v in enumerate(after)]
+            absorbed = moves[int(np.argmax(counted))]
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
@@ -495,7 +532,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
                                         data_prior, cmp.prior_names, ns, after[0], after[1],
                                         bool(open_), None if bound is None else bound[0],
-                                        after[2])
+                                        after[2], absorbed)
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
 

@@ -206,6 +206,9 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "(_at_bound: the undetermined parameters moved towards their prior median, "
                 "in ln p, as far as that refit still misses the present data by at most the "
                 "detective's acceptance; size_bound_share: the share of the way); "
+                "ranked_delta_chi2: the value decisive and the ranking use; absorbed_by "
+                "(Shaft-Frame only): the parameters that refit moves most (change of ln p) "
+                "at the size ranked, i.e. what mimics the effect on that measurement; "
                 "null: not finite or not computed")}
 
 

@@ -67,7 +67,18 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         first = next((r for r in recs if eff in r.get("separates", [])), None)
         found = any(f.get("effect") == eff for f in doc.get("findings", []))
         if not found and not (first is not None and first.get("decisive")):
-            continue    # a rejected effect that no measurement would settle: the table says it
+            if first is not None and first.get("absorbed_by"):
+                # say why no measurement settles it: what mimics it there
+                moves = first["absorbed_by"]
+                sp = first.get("speed_rpm")
+                look.append(
+                    f"{E(eff)} is {E(status)} from these data and no offered measurement "
+                    f"separates it: with <b>{E(first['measurement'])}</b>"
+                    + (f" at {num(sp, 'rpm')}" if sp is not None else "")
+                    + " measured, the network without it would still mimic it by moving "
+                    + ", ".join(f"{E(m['parameter'])} ({num(m.get('delta_ln_p'), '')} in "
+                                "ln p)" for m in moves) + ".")
+            continue    # else a rejected effect that no measurement settles: see the table
         msg = f"{E(eff)} is {E(status)} from these data"
         if first is not None and first.get("decisive"):
             sp = first.get("speed_rpm")
