@@ -206,6 +206,11 @@ def test_report_names_the_first_decisive_measurement() -> None:
     html = diagnose_html(doc, [])
     assert "no offered measurement separates it" in html
     assert "would still mimic it by moving bearing.C_air (0.25 in ln p)" in html
+    # ... or, when even the unrefitted separation is below the acceptance, says so
+    doc["recommendations"][0].update(unrefitted_delta_chi2=0.44, acceptance_delta_chi2=19.2)
+    html = diagnose_html(doc, [])
+    assert "would change <b>impedance:Shaft-Frame</b> at 300 rpm by Δχ² 0.44, below the " \
+           "19.2 the detective needs" in html
 
 
 def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.MonkeyPatch
@@ -241,8 +246,10 @@ def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.Mo
     # what absorbs it (direction dm, no prior): the one parameter, moved by exactly the
     # difference (ln p + 1)
     present = rc._Refit(("p",), np.zeros((1, 1)), np.zeros(1), 0.0)
-    _, moves = rc.refit_moves(None, "a", "b", 0.0, freq, sig, present)  # type: ignore[arg-type]
+    _, fixed, moves = rc.refit_moves(None, "a", "b",  # type: ignore[arg-type]
+                                     0.0, freq, sig, present)
     assert moves[0][0] == "p" and moves[0][1] == pytest.approx(1.0, rel=1e-9)
+    assert fixed == pytest.approx(full, rel=1e-12)     # unrefitted: the whole difference
 
 
 def test_size_bound_is_the_largest_size_the_present_data_absorb(

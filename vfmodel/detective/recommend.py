@@ -68,8 +68,10 @@ counts for ``decisive`` and the rank. The share of the way is ``size_bound_share
 Where no offered measurement separates an effect, the reason is what mimics it: each
 Shaft-Frame recommendation carries ``absorbed_by``, the parameters of the network without
 the effect that its refit (present data and the measurement, :func:`refit_moves`) moves
-most, with their change of ``ln p``, at the size the rank is taken from; the report names
-them for an effect no measurement settles.
+most, with their change of ``ln p``, at the size the rank is taken from, and the
+separation at that size without the refit (``unrefitted_delta_chi2``). For an effect no
+measurement settles the report says which: below the acceptance even unrefitted (the
+effect is too small there to show), or mimicked by those parameters.
 
 Measured on the virtual bench (``data/pmsm40kw``, ``--without lubricant_two_layer``, the
 two-layer film not found): ``impedance:Shaft-Frame`` at 300 rpm ranks first (expected
@@ -163,6 +165,8 @@ class Recommendation:
     size_bound: float | None = None
     after_refit_at_bound: float | None = None
     absorbed_by: tuple[tuple[str, float], ...] = ()
+    unrefitted: float | None = None
+    acceptance: float | None = None
 
     @property
     def rank_value(self) -> float:
@@ -198,6 +202,8 @@ class Recommendation:
                 "ranked_delta_chi2": f(self.rank_value),
                 "absorbed_by": [{"parameter": n, "delta_ln_p": f(x)}
                                 for n, x in self.absorbed_by],
+                "unrefitted_delta_chi2": f(self.unrefitted),
+                "acceptance_delta_chi2": f(self.acceptance),
                 "expected_delta_chi2_after_refit_at_bound": f(self.after_refit_at_bound)}
 
 
@@ -345,8 +351,9 @@ def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma:
 
 
 def refit_moves(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
-                present: _Refit) -> tuple[float, tuple[tuple[str, float], ...]]:
-    """:func:`refit_separation` and how that refit absorbs the effect: the
+                present: _Refit) -> tuple[float, float, tuple[tuple[str, float], ...]]:
+    """:func:`refit_separation`, the separation without the refit (every other value
+    fixed, :func:`separation`) and how the refit absorbs the effect: the
     :data:`ABSORBING` parameters of ``b`` it moves most, with their change of ``ln p``
     (largest ``|change|`` first; what mimics the effect on the present data and the
     measurement)."""
@@ -356,8 +363,8 @@ def refit_moves(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: floa
     d = np.concatenate([present.d, dm.real / sigma, dm.imag / sigma])
     miss, x = _solve(jac, d)
     top = np.argsort(-np.abs(x))[:ABSORBING]
-    return miss - present.base, tuple((present.names[i], float(x[i])) for i in top
-                                      if x[i] != 0.0)
+    return miss - present.base, separation(dm, sigma), tuple(
+        (present.names[i], float(x[i])) for i in top if x[i] != 0.0)
 
 
 def separation(d_log: ArrC, sigma: float) -> float:
@@ -491,6 +498,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
         for (meas, rpm), (d, n, m, noise) in fitted.items():
             after: list[float | None] = [None, None, None]
             moves: list[tuple[tuple[str, float], ...]] = [(), (), ()]
+            unrefitted: list[float | None] = [None, None, None]
             if prior_sigma is not None and meas == "impedance:Shaft-Frame":
                 if not present:
                     pres = _present(family, cmp.without, prior_sigma)
@@ -511,13 +519,14 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                 if bound is not None:
                     pairs.append((bound[1], bound[2]))
                 for i, (a, pr) in enumerate(pairs):
-                    after[i], moves[i] = refit_moves(family, a, cmp.without, rpm, freq, sig,
-                                                     pr)
+                    after[i], unrefitted[i], moves[i] = refit_moves(
+                        family, a, cmp.without, rpm, freq, sig, pr)
             value = _rank_value(d, after[0], after[1], open_, after[2])
             # the refit that the rank is taken from: how the network mimics that size
             counted = [v if v is not None and (i != 1 or open_) else -math.inf
                        for i, v in enumerate(after)]
-            absorbed = moves[int(np.argmax(counted))]
+            ranked = int(np.argmax(counted))
+            absorbed, fixed_ranked = moves[ranked], unrefitted[ranked]
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None
@@ -532,7 +541,8 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
                                         data_prior, cmp.prior_names, ns, after[0], after[1],
                                         bool(open_), None if bound is None else bound[0],
-                                        after[2], absorbed)
+                                        after[2], absorbed, fixed_ranked,
+                                        _acceptance(cmp.n_params, m))
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
 

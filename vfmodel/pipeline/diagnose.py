@@ -209,6 +209,8 @@ def identifiability_json(family: Family, d: Diagnosis, dataset: Any = None) -> d
                 "ranked_delta_chi2: the value decisive and the ranking use; absorbed_by "
                 "(Shaft-Frame only): the parameters that refit moves most (change of ln p) "
                 "at the size ranked, i.e. what mimics the effect on that measurement; "
+                "unrefitted_delta_chi2: the separation at that size with every other value "
+                "fixed; acceptance_delta_chi2: 10 + k ln m of that measurement; "
                 "null: not finite or not computed")}
 
 

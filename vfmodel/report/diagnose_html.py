@@ -68,16 +68,7 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         found = any(f.get("effect") == eff for f in doc.get("findings", []))
         if not found and not (first is not None and first.get("decisive")):
             if first is not None and first.get("absorbed_by"):
-                # say why no measurement settles it: what mimics it there
-                moves = first["absorbed_by"]
-                sp = first.get("speed_rpm")
-                look.append(
-                    f"{E(eff)} is {E(status)} from these data and no offered measurement "
-                    f"separates it: with <b>{E(first['measurement'])}</b>"
-                    + (f" at {num(sp, 'rpm')}" if sp is not None else "")
-                    + " measured, the network without it would still mimic it by moving "
-                    + ", ".join(f"{E(m['parameter'])} ({num(m.get('delta_ln_p'), '')} in "
-                                "ln p)" for m in moves) + ".")
+                look.append(_why_unresolved(eff, status, first))
             continue    # else a rejected effect that no measurement settles: see the table
         msg = f"{E(eff)} is {E(status)} from these data"
         if first is not None and first.get("decisive"):
@@ -98,6 +89,35 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         look.append("A mismatch was found but no candidate effect explains it: see the "
                     "rejected candidates and the residual figures.")
     return checks, look
+
+
+def _why_unresolved(eff: str, status: str, rec: dict[str, Any]) -> str:
+    """Why no offered measurement settles an effect (its first recommendation, a
+    Shaft-Frame one with ``absorbed_by``): at the size ranked it changes that measurement
+    by less than the acceptance, or the network without it mimics it (the parameters
+    its refit moves most)."""
+    ranked = rec.get("ranked_delta_chi2")
+    if rec.get("size_bound_share") is not None and \
+            ranked == rec.get("expected_delta_chi2_after_refit_at_bound"):
+        size = "the largest size the present data allow"
+    elif rec.get("prior_size_open") and ranked == rec.get(
+            "expected_delta_chi2_after_refit_at_prior"):
+        size = "its prior's typical size"
+    else:
+        size = "its fitted size"
+    sp = rec.get("speed_rpm")
+    where = (f"<b>{E(rec['measurement'])}</b>"
+             + (f" at {num(sp, 'rpm')}" if sp is not None else ""))
+    fixed, acc = rec.get("unrefitted_delta_chi2"), rec.get("acceptance_delta_chi2")
+    msg = f"{E(eff)} is {E(status)} from these data and no offered measurement separates it: "
+    if fixed is not None and acc is not None and fixed <= acc:
+        return msg + (f"at {size} it would change {where} by Δχ² {num(fixed, '')}, below "
+                      f"the {num(acc, '')} the detective needs, even with every other value "
+                      "fixed.")
+    return msg + (f"at {size}, with {where} measured, the network without it would still "
+                  "mimic it by moving " + ", ".join(
+                      f"{E(m['parameter'])} ({num(m.get('delta_ln_p'), '')} in ln p)"
+                      for m in rec["absorbed_by"]) + ".")
 
 
 def _flag(s: float | None) -> str:
