@@ -67,8 +67,10 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         first = next((r for r in recs if eff in r.get("separates", [])), None)
         found = any(f.get("effect") == eff for f in doc.get("findings", []))
         if not found and not (first is not None and first.get("decisive")):
-            if first is not None and first.get("absorbed_by"):
-                look.append(_why_unresolved(eff, status, first))
+            sf = next((r for r in recs if eff in r.get("separates", [])
+                       and r.get("absorbed_by")), None)
+            if sf is not None:   # the refit-aware (Shaft-Frame) one says why
+                look.append(_why_unresolved(eff, status, sf))
             continue    # else a rejected effect that no measurement settles: see the table
         msg = f"{E(eff)} is {E(status)} from these data"
         if first is not None and first.get("decisive"):
