@@ -540,8 +540,9 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
             best[meas] = Recommendation(meas, rpm, cmp.separates, d,
                                         _decisive(value, cmp.n_params, m), n, noise, dp,
                                         data_prior, cmp.prior_names, ns, after[0], after[1],
-                                        bool(open_), None if bound is None else bound[0],
-                                        after[2], absorbed, fixed_ranked,
+                                        bool(open_),
+                                        None if bound is None or after[2] is None
+                                        else bound[0], after[2], absorbed, fixed_ranked,
                                         _acceptance(cmp.n_params, m))
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
