@@ -43,13 +43,17 @@ GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.
 
 
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
-         standstill_fit: str = "combined") -> dict[str, Any]:
-    """Reproduce one dataset; returns its metrics and the truth comparison."""
+         standstill_fit: str = "combined", extra_effects: tuple[str, ...] = ()
+         ) -> dict[str, Any]:
+    """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
+    metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.greybox.effects import PAPER_EFFECTS
     from vfmodel.pipeline.reproduce import reproduce
 
     t0 = time.perf_counter()
     res = reproduce(read_dataset(path), blackbox=False,
+                    effects=tuple(sorted(PAPER_EFFECTS | set(extra_effects))),
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit).results  # type: ignore[arg-type]
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
@@ -262,6 +266,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="condition 2 at standstill: H1 and the waveform below 1 MHz "
                          "(default), the waveform or the H1 transfer alone (the method "
                          "before 2026-11-24), for comparison")
+    ap.add_argument("--effects", default="",
+                    help="effects added to the paper's network, comma-separated (e.g. "
+                         "endwinding_capacitance, what the detective finds on these benches)")
     a = ap.parse_args(argv)
     from benches.independent import write_bench
 
@@ -278,7 +285,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit): k
+        extra = tuple(e for e in a.effects.split(",") if e)
+        futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()

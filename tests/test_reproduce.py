@@ -153,3 +153,34 @@ def test_predict_from_netlist(run: tuple[Path, Path, dict[str, Any]]) -> None:
     assert 0.1 < s2["peak_model_v"] < 20.0
     assert main(["predict", str(out / "network_200rpm.cir"), "--inverter", "bogus=1",
                  "--out", str(pdir / "bad"), "-q"]) == 2
+
+
+def test_added_effect_reaches_the_network(run: tuple[Path, Path, dict[str, Any]],
+                                          tmp_path: Path) -> None:
+    """``--add-effect endwinding_capacitance``: the identified network has it (results.json
+    ``model.effects``), the exported netlist carries the three phase-to-phase capacitors at
+    the fitted ``winding.C_pp`` and still reproduces the model's impedance (1e-9); an
+    unknown effect is refused before anything is written (exit 2)."""
+    ds, _, _ = run
+    out = tmp_path / "out"
+    assert main(["reproduce", str(ds), "--out", str(out), "--sections", "2", "--max-nfev",
+                 "12", "--no-blackbox", "--add-effect", "endwinding_capacitance",
+                 "--quiet"]) == 0
+    m = json.loads((out / "results.json").read_text())["model"]
+    assert "endwinding_capacitance" in m["effects"]
+    circ = from_spice((out / "network_0rpm.cir").read_text())
+    caps = {e.name: e.value for e in circ.elements if e.kind == "capacitor"
+            and {e.nodes[0], e.nodes[1]} in ({"U", "V"}, {"V", "W"}, {"W", "U"})}
+    assert len(caps) == 3
+    for v in caps.values():
+        assert v == pytest.approx(m["params"]["winding.C_pp"], rel=1e-12)
+    p = ParamSet.from_specs(param_specs()).with_values(m["params"])
+    spec = NetSpec(frozenset(m["effects"]), m["n_rungs"], m["n_sections"])
+    f = np.logspace(3, 7, 21)
+    pairs = [TOPOLOGY_PORTS[t] for t in TOPOLOGY_PORTS]
+    z_model = spec.build(p, "standstill").port_impedance(f, pairs)
+    assert np.max(np.abs(circ.port_impedance(f, pairs) - z_model) / np.abs(z_model)) < 1e-9
+    bad = tmp_path / "bad"
+    assert main(["reproduce", str(ds), "--out", str(bad), "--add-effect", "bogus",
+                 "--quiet"]) == 2
+    assert not bad.exists()

@@ -35,26 +35,31 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")
+@click.option("--add-effect", "add_effects", multiple=True, metavar="EFFECT",
+              help="Add an effect to the paper's network (repeatable), e.g. one that "
+                   "`vfmodel diagnose` found: endwinding_capacitance, fixture_inductance.")
 @out_option
 @quiet_option
 def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, priors: bool,
-              out_dir: Path, quiet: bool) -> None:
+              add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
     recordings, lubricant per speed), validate it, compare it with the classical BVR model
     and a black-box fit. Writes DIR/results.json, figures (PNG), DIR/report.html and
     DIR/network_<rpm>rpm.cir for every recorded speed."""
     from vfmodel.core.atomic import atomic_write_text, staged_output
     from vfmodel.core.io_dataset import read_dataset
+    from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
     from vfmodel.pipeline.reproduce import reproduce as run
     from vfmodel.report.html import write_reproduce_html
     from vfmodel.report.reproduce_figures import write_figures
 
     secs = _sections(sections)
+    effects = PAPER_EFFECTS | check_effects(add_effects, "--add-effect")
     with staged_output(out_dir, owned=REPRODUCE_OUTPUTS) as stage:
         ds = read_dataset(dataset)
         prog = progress_bar(quiet)
-        res = run(ds, sections=secs, blackbox=not no_blackbox, max_nfev=max_nfev,
-                  progress=prog, priors=priors)
+        res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
+                  max_nfev=max_nfev, progress=prog, priors=priors)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)
