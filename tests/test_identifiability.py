@@ -196,16 +196,18 @@ def test_report_names_the_first_decisive_measurement() -> None:
     assert "measure <b>impedance:Shaft-Frame</b> at 300" in html
     # decided at the size bound: the sentence gives that separation and says so
     doc["recommendations"][0].update(expected_delta_chi2=0.47, ranked_delta_chi2=1259.0,
-                                     size_bound_share=0.73,
+                                     size_bound_share=0.73, ranked_size="bound",
                                      expected_delta_chi2_after_refit_at_bound=1259.0)
     html = diagnose_html(doc, [])
     assert "(expected Δχ² 1259 for the largest size the present data allow)" in html
     # no decisive measurement: the sentence names what mimics the effect
-    doc["recommendations"][0].update(decisive=False, absorbed_by=[
+    doc["recommendations"][0].update(decisive=False, ranked_size="prior", absorbed_by=[
         {"parameter": "bearing.C_air", "delta_ln_p": 0.25}])
     html = diagnose_html(doc, [])
     assert "no offered measurement separates it" in html
-    assert "would still mimic it by moving bearing.C_air (0.25 in ln p)" in html
+    assert "at its prior's typical size, with <b>impedance:Shaft-Frame</b> at 300 rpm " \
+           "measured, the network without it would still mimic it by moving bearing.C_air " \
+           "(0.25 in ln p)" in html
     # ... or, when even the unrefitted separation is below the acceptance, says so
     doc["recommendations"][0].update(unrefitted_delta_chi2=0.44, acceptance_delta_chi2=19.2)
     html = diagnose_html(doc, [])
@@ -246,7 +248,8 @@ def test_refit_separation_is_what_the_refit_cannot_absorb(monkeypatch: pytest.Mo
     # what absorbs it (direction dm, no prior): the one parameter, moved by exactly the
     # difference (ln p + 1)
     present = rc._Refit(("p",), np.zeros((1, 1)), np.zeros(1), 0.0)
-    _, fixed, moves = rc.refit_moves(None, "a", "b",  # type: ignore[arg-type]
+    rows = rc.measurement_rows(None, "b", ("p",), 0.0, freq, sig)  # type: ignore[arg-type]
+    _, fixed, moves = rc.refit_moves(None, "a", rows,  # type: ignore[arg-type]
                                      0.0, freq, sig, present)
     assert moves[0][0] == "p" and moves[0][1] == pytest.approx(1.0, rel=1e-9)
     assert fixed == pytest.approx(full, rel=1e-12)     # unrefitted: the whole difference
@@ -282,3 +285,16 @@ def test_size_bound_is_the_largest_size_the_present_data_absorb(
     assert rc.size_bound(None, cmp, present, 1e9)[0] == 1.0 - 2.0**-rc.BOUND_STEPS  # type: ignore[index]
     shifted = rc._Present((), np.zeros((v.size, 0)), -v)   # already missed at t = 0
     assert rc.size_bound(None, cmp, shifted, 100.0) is None
+
+
+def test_ranked_size_is_the_largest_counted_separation() -> None:
+    """The rank is the largest of the refit separations that count, and says which: the
+    prior's size only when the present data leave it open, the bound when computed; a
+    fixed-value separation (no refit) has no size."""
+    import vfmodel.detective.recommend as rc
+
+    assert rc._ranked(5.0, None, None, False) == (5.0, None)
+    assert rc._ranked(5.0, 1.0, 9.0, False) == (1.0, "fitted")     # prior excluded
+    assert rc._ranked(5.0, 1.0, 9.0, True) == (9.0, "prior")
+    assert rc._ranked(5.0, 1.0, None, False, 30.0) == (30.0, "bound")
+    assert rc._ranked(5.0, 40.0, None, False, 30.0) == (40.0, "fitted")

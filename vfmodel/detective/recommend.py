@@ -98,7 +98,7 @@ from __future__ import annotations
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -115,6 +115,10 @@ __all__ = ["IMPEDANCE_SIGMA_DEFAULT", "Comparison", "Net", "Recommendation", "co
 
 ArrF = NDArray[np.float64]
 ArrC = NDArray[np.complex128]
+
+RankedSize = Literal["fitted", "prior", "bound"]
+"""The effect's size a recommendation is ranked at (:attr:`Recommendation.ranked_size`)."""
+_SIZES: tuple[RankedSize, ...] = ("fitted", "prior", "bound")
 
 IMPEDANCE_SIGMA_DEFAULT = 0.005
 """Noise of ``Re ln Z`` and ``Im ln Z`` of an impedance measurement when the dataset has no
@@ -179,9 +183,19 @@ class Recommendation:
         to the prior's, :func:`size_bound`; an effect that size would still be missed by
         the present data, so the measurement is worth making when it would tell it); else
         the separation at fixed values."""
-        return _rank_value(self.expected_delta_chi2, self.after_refit,
-                           self.after_refit_at_prior, self.prior_size_open,
-                           self.after_refit_at_bound)
+        return self._ranked[0]
+
+    @property
+    def ranked_size(self) -> RankedSize | None:
+        """The size :attr:`rank_value` was taken at: the effect's fitted size, its prior's
+        typical size, or the size bound; None for a fixed-value separation."""
+        return self._ranked[1]
+
+    @property
+    def _ranked(self) -> tuple[float, RankedSize | None]:
+        return _ranked(self.expected_delta_chi2, self.after_refit,
+                       self.after_refit_at_prior, self.prior_size_open,
+                       self.after_refit_at_bound)
 
     def as_json(self) -> dict[str, Any]:
         def f(x: float | None) -> float | None:
@@ -200,6 +214,7 @@ class Recommendation:
                 "prior_size_open": self.prior_size_open,
                 "size_bound_share": f(self.size_bound),
                 "ranked_delta_chi2": f(self.rank_value),
+                "ranked_size": self.ranked_size,
                 "absorbed_by": [{"parameter": n, "delta_ln_p": f(x)}
                                 for n, x in self.absorbed_by],
                 "unrefitted_delta_chi2": f(self.unrefitted),
@@ -269,12 +284,19 @@ def network_spread(family: Any, fit: Net, names: Sequence[str], cov: ArrF, rpm: 
     return total / sigma**2
 
 
-def _rank_value(fixed: float, after: float | None, after_at_prior: float | None,
-                open_: bool, after_at_bound: float | None = None) -> float:
-    """:attr:`Recommendation.rank_value` from its parts."""
+def _ranked(fixed: float, after: float | None, after_at_prior: float | None,
+            open_: bool, after_at_bound: float | None = None
+            ) -> tuple[float, RankedSize | None]:
+    """:attr:`Recommendation.rank_value` from its parts, and the size it was taken at
+    (None: the fixed-value separation)."""
     if after is None:
-        return fixed
-    return max(after, (after_at_prior or 0.0) if open_ else 0.0, after_at_bound or 0.0)
+        return fixed, None
+    sizes: list[tuple[float, RankedSize]] = [(after, "fitted")]
+    if open_ and after_at_prior is not None:
+        sizes.append((after_at_prior, "prior"))
+    if after_at_bound is not None:
+        sizes.append((after_at_bound, "bound"))
+    return max(sizes, key=lambda x: x[0])
 
 
 def _solve(jac: ArrF, d: ArrF) -> tuple[float, ArrF]:
@@ -347,18 +369,30 @@ def refit_separation(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma:
     can mimic on that path (a Foster-equivalent one-port, e.g. an edge capacitance beside
     a free film) separates by ``expected_delta_chi2`` at fixed values but by little here.
     Linearised at ``b``: for large differences it is an estimate, not a bound."""
-    return refit_moves(family, a, b, rpm, freq, sigma, present)[0]
+    rows = measurement_rows(family, b, present.names, rpm, freq, sigma)
+    return refit_moves(family, a, rows, rpm, freq, sigma, present)[0]
 
 
-def refit_moves(family: Any, a: Net, b: Net, rpm: float, freq: ArrF, sigma: float,
-                present: _Refit) -> tuple[float, float, tuple[tuple[str, float], ...]]:
-    """:func:`refit_separation`, the separation without the refit (every other value
+def measurement_rows(family: Any, b: Net, names: Sequence[str], rpm: float, freq: ArrF,
+                     sigma: float) -> tuple[ArrC, ArrC]:
+    """What a shaft-to-frame measurement at ``rpm`` adds to the refit of ``b`` (the
+    network without the effect), the same whatever it is refitted towards:
+    ``d ln Z / d ln p / sigma`` of ``names`` and ``ln Z`` of ``b``."""
+    return (_dlnz_dlnp(family, b, names, rpm, freq) / sigma,
+            np.log(_shaft_frame(family, b, rpm, freq)))
+
+
+def refit_moves(family: Any, a: Net, rows: tuple[ArrC, ArrC], rpm: float, freq: ArrF,
+                sigma: float, present: _Refit
+                ) -> tuple[float, float, tuple[tuple[str, float], ...]]:
+    """:func:`refit_separation` towards ``a`` with the measurement's ``rows`` of ``b``
+    (:func:`measurement_rows`), the separation without the refit (every other value
     fixed, :func:`separation`) and how the refit absorbs the effect: the
     :data:`ABSORBING` parameters of ``b`` it moves most, with their change of ``ln p``
     (largest ``|change|`` first; what mimics the effect on the present data and the
     measurement)."""
-    g = _dlnz_dlnp(family, b, present.names, rpm, freq) / sigma
-    dm = np.log(_shaft_frame(family, a, rpm, freq) / _shaft_frame(family, b, rpm, freq))
+    g, ln_zb = rows
+    dm = np.log(_shaft_frame(family, a, rpm, freq)) - ln_zb
     jac = np.vstack([present.jac, g.real, g.imag])
     d = np.concatenate([present.d, dm.real / sigma, dm.imag / sigma])
     miss, x = _solve(jac, d)
@@ -518,15 +552,15 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                 pairs = list(zip(nets, present, strict=True))
                 if bound is not None:
                     pairs.append((bound[1], bound[2]))
+                rows = measurement_rows(family, cmp.without, present[0].names, rpm, freq,
+                                        sig)
                 for i, (a, pr) in enumerate(pairs):
                     after[i], unrefitted[i], moves[i] = refit_moves(
-                        family, a, cmp.without, rpm, freq, sig, pr)
-            value = _rank_value(d, after[0], after[1], open_, after[2])
+                        family, a, rows, rpm, freq, sig, pr)
+            value, size = _ranked(d, after[0], after[1], open_, after[2])
             # the refit that the rank is taken from: how the network mimics that size
-            counted = [v if v is not None and (i != 1 or open_) else -math.inf
-                       for i, v in enumerate(after)]
-            ranked = int(np.argmax(counted))
-            absorbed, fixed_ranked = moves[ranked], unrefitted[ranked]
+            at = _SIZES.index(size) if size is not None else 0
+            absorbed, fixed_ranked = moves[at], unrefitted[at]
             if meas in best and best[meas].rank_value >= value:
                 continue
             dp = prior[(meas, rpm)][0] if (meas, rpm) in prior else None

@@ -76,8 +76,7 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
         if first is not None and first.get("decisive"):
             sp = first.get("speed_rpm")
             ranked = first.get("ranked_delta_chi2", first.get("expected_delta_chi2"))
-            at_bound = first.get("size_bound_share") is not None and \
-                ranked == first.get("expected_delta_chi2_after_refit_at_bound")
+            at_bound = first.get("ranked_size") == "bound"
             msg += (f"; measure <b>{E(first['measurement'])}</b>"
                     + (f" at {num(sp, 'rpm')}" if sp is not None else "")
                     + f" (expected Δχ² {num(ranked, '')}"
@@ -98,15 +97,9 @@ def _why_unresolved(eff: str, status: str, rec: dict[str, Any]) -> str:
     Shaft-Frame one with ``absorbed_by``): at the size ranked it changes that measurement
     by less than the acceptance, or the network without it mimics it (the parameters
     its refit moves most)."""
-    ranked = rec.get("ranked_delta_chi2")
-    if rec.get("size_bound_share") is not None and \
-            ranked == rec.get("expected_delta_chi2_after_refit_at_bound"):
-        size = "the largest size the present data allow"
-    elif rec.get("prior_size_open") and ranked == rec.get(
-            "expected_delta_chi2_after_refit_at_prior"):
-        size = "its prior's typical size"
-    else:
-        size = "its fitted size"
+    size = {"bound": "the largest size the present data allow",
+            "prior": "its prior's typical size"}.get(rec.get("ranked_size") or "",
+                                                     "its fitted size")
     sp = rec.get("speed_rpm")
     where = (f"<b>{E(rec['measurement'])}</b>"
              + (f" at {num(sp, 'rpm')}" if sp is not None else ""))
