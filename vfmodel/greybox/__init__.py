@@ -89,6 +89,11 @@ if TYPE_CHECKING:
         machine_names,
         thin_spectra,
     )
+    from vfmodel.greybox.input_noise import (
+        input_noise_psd,
+        periodic_lines,
+        quiet_noise_psd,
+    )
     from vfmodel.greybox.lsq import (
         LogFit,
         fit_log,
@@ -116,9 +121,7 @@ if TYPE_CHECKING:
         bearing_term,
         dlogv_dlogp,
         impedance_term,
-        input_noise_psd,
         log_map,
-        periodic_lines,
         prepare_recording,
         steady_output,
         values_of,
@@ -186,9 +189,10 @@ _EXPORTS: dict[str, str] = {
     "bearing_term": "objective",
     "dlogv_dlogp": "objective",
     "impedance_term": "objective",
-    "input_noise_psd": "objective",
+    "input_noise_psd": "input_noise",
     "log_map": "objective",
-    "periodic_lines": "objective",
+    "periodic_lines": "input_noise",
+    "quiet_noise_psd": "input_noise",
     "prepare_recording": "objective",
     "steady_output": "objective",
     "values_of": "objective",
@@ -299,6 +303,7 @@ __all__ = [
     "prepare_recording",
     "probe_response",
     "pwm_edges",
+    "quiet_noise_psd",
     "record_term",
     "spectral_corr",
     "spectral_corr_periodogram",

@@ -459,7 +459,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         its own uncertainty. The rotating records always use ``"diagonal"``.
     input_noise : bool
         Model the bias of the standstill H1 by noise on the measured terminal voltages
-        (:func:`bearing_term`; only when the record is periodic).
+        (:func:`bearing_term`; the noise from a periodic record's empty bins or from the
+        stretches without switching, :mod:`vfmodel.greybox.input_noise`).
     hold_standstill : sequence of str
         Parameters kept at their impedance-stage values in the standstill stage (default
         :data:`STANDSTILL_HIDDEN`: the air-gap and bearing air capacitances, in parallel

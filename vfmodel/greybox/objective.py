@@ -41,6 +41,7 @@ from vfmodel.errors import InputError
 from vfmodel.greybox._h1op import H1Operator, h1_operator
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES, TOPOLOGY_PORTS
 from vfmodel.greybox.bearing import BEARING_C_REF_HZ
+from vfmodel.greybox.input_noise import input_noise_psd
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.params import ParamSet
 from vfmodel.signals.filters import F_CUT_HZ, brickwall_filter
@@ -581,11 +582,13 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     ``H1 = H (G_xx - G_nn) G_xx^-1 = H (I - G_nn G_xx^-1)``, while the model output computed
     from the same noisy inputs gives ``H`` exactly; the term therefore multiplies the
     model's H1 by the same factor (Bendat & Piersol, sec. 9.2, bias of H1 by input noise).
-    ``G_nn`` is estimated by :func:`input_noise_psd` from a periodic record (the standstill
-    record: constant duty cycles, every PWM period alike); when the record is not
-    periodic the bias is not modelled. At standstill the terminal spectrum above ~7 MHz
-    is only a few dB above the probe noise and the uncorrected fit lowers the transfer
-    there (the ringing peak of the model then comes out ~10 % low). The correction is
+    ``G_nn`` is estimated by :func:`vfmodel.greybox.input_noise.input_noise_psd`: from the
+    bins between the lines of a periodic record (constant duty cycles, every PWM period
+    alike), else from the record's stretches without switching (duty-cycle jitter); when
+    neither gives an estimate the bias is not modelled. At standstill the terminal
+    spectrum above ~7 MHz is only a few dB above the probe noise and the uncorrected fit
+    lowers the transfer there (the ringing peak of the model then comes out ~10 % low).
+    The correction is
     first order and ``G_nn`` an estimate: bins where the input noise exceeds the fraction
     ``max_input_noise`` of the power of any input (``G_nn,ii / G_xx,ii``) are dropped.
     """
@@ -647,48 +650,3 @@ def _whitening(h1: H1Result, mask: NDArray[np.bool_], hm: ArrC, eps: float) -> A
     # difference then each have variance 1/2: scale by sqrt(2) for unit variance
     out = np.einsum("fik,fk,fjk->fij", v, np.sqrt(2.0 / w), v.conj())
     return np.asarray(out, dtype=complex)
-
-
-def periodic_lines(prep: PreparedRecording, max_periods: int = 64,
-                   min_fraction: float = 0.9995) -> int:
-    """Number ``m`` of identical periods in the record (1 if it is not periodic).
-
-    A record of ``m`` identical periods has its spectrum on every ``m``-th FFT bin only.
-    ``m`` is the largest number up to ``max_periods`` for which those bins hold at least
-    ``min_fraction`` of the (filtered) terminal-voltage power above DC; the rest is noise.
-    """
-    pw = np.sum(np.abs(prep.x_bins[:, 1:]) ** 2, axis=0)
-    k = np.arange(1, prep.x_bins.shape[1])
-    tot = float(pw.sum())
-    best = 1
-    if tot <= 0:
-        return best
-    for m in range(2, max_periods + 1):
-        if float(pw[k % m == 0].sum()) >= min_fraction * tot:
-            best = m
-    return best
-
-
-def input_noise_psd(prep: PreparedRecording, smooth_hz: float = 200e3,
-                    min_periods: int = 4) -> ArrF | None:
-    """One-sided noise PSD (3, n_f) of the filtered terminal voltages on the H1 grid, or
-    None when the record is not periodic (:func:`periodic_lines` < ``min_periods``).
-
-    The bins between the lines of a periodic record hold only noise: their power
-    ``2 |X_k|^2 / (fs n)`` averaged over ``smooth_hz`` (moving mean) and interpolated onto
-    the H1 frequencies (same density scaling as ``h1.gxx``).
-    """
-    m = periodic_lines(prep)
-    if m < min_periods:
-        return None
-    fb = prep.bins_hz
-    k = np.arange(fb.size)
-    off = (k % m != 0) & (k > 0)
-    pw = 2.0 * np.abs(prep.x_bins) ** 2 / (prep.fs * prep.n_samples)
-    width = max(1, round(float(smooth_hz / (fb[1] - fb[0]))))
-    ker = np.ones(width)
-    num = np.stack([np.convolve(np.where(off, row, 0.0), ker, mode="same") for row in pw])
-    den = np.convolve(off.astype(float), ker, mode="same")
-    psd = num / np.maximum(den, 1.0)
-    f = prep.h1.freq_hz
-    return np.stack([np.interp(f, fb, row) for row in psd])
