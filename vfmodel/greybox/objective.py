@@ -589,7 +589,8 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     spectrum above ~7 MHz is only a few dB above the probe noise and the uncorrected fit
     lowers the transfer there (the ringing peak of the model then comes out ~10 % low).
     The correction is first order and ``G_nn`` an estimate: bins where the input noise
-    exceeds the fraction ``max_input_noise`` of the power of any input (``G_nn,ii / G_xx,ii``) are dropped.
+    exceeds the fraction ``max_input_noise`` of the power of any input
+    (``G_nn,ii / G_xx,ii``) are dropped.
     """
     check_choice("weighting", weighting, H1Weighting)
     if int(bin_step) != bin_step or bin_step < 1:
