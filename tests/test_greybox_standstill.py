@@ -65,17 +65,22 @@ def _record(sigma_x: float, sigma_y: float, seed: int) -> tuple[Recording, float
     return Recording(FS, np.vstack([xn, yn]), ("u_U", "u_V", "u_W", "u_B"), 0.0), clean_peak
 
 
+def _white_ratio(prep: PreparedRecording, sigma: float, f_lo: float) -> np.ndarray:
+    """:func:`input_noise_psd` of ``prep`` from ``f_lo`` to 9.5 MHz over the density of
+    white noise of standard deviation ``sigma``: one-sided ``2 sigma^2 / fs`` (the 10 MHz
+    brickwall filter keeps the in-band density)."""
+    g = input_noise_psd(prep)
+    assert g is not None
+    f = prep.h1.freq_hz
+    band = (f > f_lo) & (f < 9.5e6)
+    return np.asarray(g[:, band] / (2 * sigma**2 / FS))
+
+
 def test_input_noise_psd_of_periodic_record() -> None:
     rec, _ = _record(2.0, 0.03, 0)
     prep = prepare_recording(rec)
     assert periodic_lines(prep) == M
-    g = input_noise_psd(prep)
-    assert g is not None
-    f = prep.h1.freq_hz
-    band = (f > 0.2e6) & (f < 9.5e6)
-    # white noise of variance s^2: one-sided density 2 s^2 / fs (the 10 MHz brickwall
-    # filter keeps the in-band density)
-    ratio = g[:, band] / (2 * 2.0**2 / FS)
+    ratio = _white_ratio(prep, 2.0, 0.2e6)
     assert np.median(ratio) == pytest.approx(1.0, abs=0.05)
     assert np.all(np.abs(ratio - 1) < 0.5)   # 200 kHz moving mean of ~150 bins: ~8 % std
     # a record that is not periodic (noise only) has no line structure: no estimate
@@ -101,11 +106,7 @@ def test_input_noise_psd_of_record_that_is_not_periodic(seed: int) -> None:
     prep = prepare_recording(_jittered(2.0, seed))
     assert periodic_lines(prep) == 1
     assert periodic_noise_psd(prep) is None
-    g = input_noise_psd(prep)
-    assert g is not None
-    f = prep.h1.freq_hz
-    band = (f > 0.5e6) & (f < 9.5e6)
-    ratio = g[:, band] / (2 * 2.0**2 / FS)
+    ratio = _white_ratio(prep, 2.0, 0.5e6)
     # half-overlapping 5 us windows of a 400 us record, the quiet ones averaged: ~10 % std
     # per 200 kHz bin (measured over seeds 4-8: 0.10-0.11, extremes 0.68-1.38)
     assert np.median(ratio) == pytest.approx(1.0, abs=0.05)
@@ -114,6 +115,8 @@ def test_input_noise_psd_of_record_that_is_not_periodic(seed: int) -> None:
     prep_p = prepare_recording(_record(2.0, 0.03, seed)[0])
     gp, gq = periodic_noise_psd(prep_p), quiet_noise_psd(prep_p)
     assert gp is not None and gq is not None
+    f = prep_p.h1.freq_hz
+    band = (f > 0.5e6) & (f < 9.5e6)
     assert np.median(gq[:, band] / gp[:, band]) == pytest.approx(1.0, abs=0.05)
 
 
