@@ -14,6 +14,7 @@ import json
 import os
 import shutil
 import subprocess
+import tempfile
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -50,10 +51,16 @@ class Browser:
     def __init__(self, exe: str, profile: Path, width: int = 1280, height: int = 800) -> None:
         import websocket
 
+        # Chromium leaves its singleton socket directory in TMPDIR when it is terminated
+        # (three /tmp/org.chromium.Chromium.* per test run): a TMPDIR of its own, removed
+        # on close (short: the socket path must fit a sockaddr_un, 108 bytes)
+        self._tmp = tempfile.mkdtemp(prefix="vfm-cdp-")
+        tmp = self._tmp
         self.proc = subprocess.Popen(
             [exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", "--remote-debugging-port=0",
              f"--window-size={width},{height}", "about:blank"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            env={**os.environ, "TMPDIR": tmp})
         port_file = profile / "DevToolsActivePort"
         deadline = time.monotonic() + 30
         while not (port_file.is_file() and port_file.read_text().strip()):
@@ -142,6 +149,7 @@ class Browser:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        shutil.rmtree(self._tmp, ignore_errors=True)
 
 
 @contextlib.contextmanager
