@@ -9,8 +9,8 @@ above the probe noise, so the model must carry that factor, and ``G_nn`` must be
 Two estimates of ``G_nn``, both one-sided densities (V^2/Hz, the scaling of ``h1.gxx``)
 interpolated onto the H1 frequencies:
 
-- :func:`input_noise_psd` from the bins between the lines of a periodic record (every PWM
-  period alike): those bins hold only noise;
+- :func:`periodic_noise_psd` from the bins between the lines of a periodic record (every
+  PWM period alike): those bins hold only noise;
 - :func:`quiet_noise_psd` from the stretches of the record without switching: a record
   whose periods differ (duty-cycle jitter, a rotating machine) has no empty bins, but
   between the edges the terminal voltages are flat and what varies is noise. The record is
@@ -21,7 +21,8 @@ interpolated onto the H1 frequencies:
   15(2), 1967, doi:10.1109/TAU.1967.1161901).
 
 :func:`input_noise_psd` uses the periodic estimate when the record is periodic and the
-quiet-window estimate otherwise.
+quiet-window estimate otherwise. Both the identification's standstill stage and the
+detective's bearing terms (every record, rotating ones too) model the bias with it.
 """
 
 from __future__ import annotations
