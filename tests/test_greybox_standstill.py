@@ -115,6 +115,9 @@ def test_input_noise_psd_of_record_that_is_not_periodic(seed: int, ringing: bool
     prep = prepare_recording(_jittered(2.0, seed, ringing))
     assert periodic_lines(prep) == 1
     assert periodic_noise_psd(prep) is None
+    # computed once per record, what every bearing term on it reads
+    assert prep.terminal_noise_psd is prep.terminal_noise_psd
+    np.testing.assert_array_equal(prep.terminal_noise_psd, input_noise_psd(prep))
     ratio = _white_ratio(prep, 2.0, 0.5e6)
     # half-overlapping 5 us windows of a 400 us record, the quiet ones averaged: ~10 % std
     # per 200 kHz bin (measured over seeds 4-8: 0.10-0.11, extremes 0.68-1.38)

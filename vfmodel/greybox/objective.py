@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -269,6 +270,13 @@ class PreparedRecording:
     @property
     def fs_h1(self) -> float:
         return self.fs * self.n_h1 / self.n_samples
+
+    @cached_property
+    def terminal_noise_psd(self) -> ArrF | None:
+        """:func:`vfmodel.greybox.input_noise.input_noise_psd` of the record, computed once
+        (3-10 ms): every bearing term built on it with the input-noise bias reads it, and
+        the detective builds one per network structure it tries."""
+        return input_noise_psd(self)
 
 
 def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
@@ -601,7 +609,7 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz) & (coh >= min_coherence)
     if mask.sum() < 10:
         mask = h1.valid & (f >= f_min_hz) & (f <= f_max_hz)
-    gnn = input_noise_psd(prep) if input_noise else None
+    gnn = prep.terminal_noise_psd if input_noise else None
     if gnn is not None:
         # the bias model is first order in G_nn / G_xx: drop the bins where the input noise
         # is a sizable part of the input power (the top of the band at standstill)
