@@ -337,3 +337,27 @@ def test_a_flat_recorded_channel_is_refused_with_its_name(channel: str) -> None:
     good = prepare_output(prep, y, channel) if channel == "u_B_DE" else prep
     assert bearing_term(good, NetSpec(), P0, "rotating",
                         quantity=RECORD_QUANTITIES[channel]).n_residuals > 0
+
+
+def test_lubricant_starts_add_the_insulating_film_once() -> None:
+    """The lubricant stage starts from the previous speed, from it with the base-oil film
+    100x more resistive (the insulating basin), and from the film matching the record's
+    BVR; a previous film already at R_1's upper bound (insulating) gives no second copy
+    of the warm start."""
+    from vfmodel.greybox.identify import INSULATING_START, _lubricant_starts
+
+    rng = np.random.default_rng(7)
+    fs, n = 100e6, 2**14
+    t = np.arange(n)
+    x = np.vstack([270.0 * ((t // (1000 + 300 * k)) % 2) for k in range(3)])
+    y = 0.02 * (x.mean(axis=0) - 135.0) + 0.01 * rng.standard_normal(n)
+    prep = prepare_recording(Recording(fs, np.vstack([x, y]), ("u_U", "u_V", "u_W", "u_B"),
+                                       300.0))
+    eff = NetSpec().effects
+    starts = _lubricant_starts(P0, prep, eff)
+    r1 = [s["lubricant.R_1"] for s in starts]
+    assert r1[:2] == [P0["lubricant.R_1"], P0["lubricant.R_1"] * INSULATING_START]
+    top = next(s.upper for s in P0.specs if s.name == "lubricant.R_1")
+    at_top = P0.with_values({"lubricant.R_1": top})
+    assert [s["lubricant.R_1"] for s in _lubricant_starts(at_top, prep, eff)].count(top) \
+        == len(_lubricant_starts(at_top, prep, eff)) == len(starts) - 1

@@ -756,8 +756,11 @@ def _lubricant_starts(previous: ParamSet, prep: PreparedRecording,
     insulating start (400 rpm: 42.1 / 6.58 % against 12.4 / 0.87 %)."""
     starts = [previous]
     if "lubricant.R_1" in previous:
-        starts.append(previous.with_values(
-            {"lubricant.R_1": previous["lubricant.R_1"] * INSULATING_START}, clip=True))
+        ins = previous.with_values(
+            {"lubricant.R_1": previous["lubricant.R_1"] * INSULATING_START}, clip=True)
+        if ins["lubricant.R_1"] != previous["lubricant.R_1"]:
+            # at its upper bound (an insulating previous speed) it is the warm start again
+            starts.append(ins)
     dc = divider_capacitances(previous, effects)
     bvr = average_bvr(common_mode(prep.terminals), prep.bearing)
     if bvr > 0:
