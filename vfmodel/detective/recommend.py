@@ -98,7 +98,7 @@ from __future__ import annotations
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,7 +118,7 @@ ArrC = NDArray[np.complex128]
 
 RankedSize = Literal["fitted", "prior", "bound"]
 """The effect's size a recommendation is ranked at (:attr:`Recommendation.ranked_size`)."""
-_SIZES: tuple[RankedSize, ...] = ("fitted", "prior", "bound")
+_SIZES: tuple[RankedSize, ...] = get_args(RankedSize)
 
 IMPEDANCE_SIGMA_DEFAULT = 0.005
 """Noise of ``Re ln Z`` and ``Im ln Z`` of an impedance measurement when the dataset has no

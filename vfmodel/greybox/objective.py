@@ -596,7 +596,8 @@ def bearing_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
     neither gives an estimate the bias is not modelled. At standstill the terminal
     spectrum above ~7 MHz is only a few dB above the probe noise and the uncorrected fit
     lowers the transfer there (the ringing peak of the model then comes out ~10 % low).
-    The correction is first order and ``G_nn`` an estimate: bins where the input noise
+    The factor holds in expectation, but ``G_nn`` is an estimate whose relative error
+    enters the factor multiplied by ``G_nn / (G_xx - G_nn)``: bins where the input noise
     exceeds the fraction ``max_input_noise`` of the power of any input
     (``G_nn,ii / G_xx,ii``) are dropped.
     """

@@ -93,10 +93,11 @@ def _checks(doc: dict[str, Any]) -> tuple[list[Check], list[str]]:
 
 
 def _why_unresolved(eff: str, status: str, rec: dict[str, Any]) -> str:
-    """Why no offered measurement settles an effect (its first recommendation, a
-    Shaft-Frame one with ``absorbed_by``): at the size ranked it changes that measurement
-    by less than the acceptance, or the network without it mimics it (the parameters
-    its refit moves most)."""
+    """Why no offered measurement settles an effect, from its first refit-aware
+    recommendation (a Shaft-Frame one with ``absorbed_by``; its first overall may be a
+    channel one): at the size ranked it changes that measurement by less than the
+    acceptance, or the network without it mimics it (the parameters its refit moves
+    most)."""
     size = {"bound": "the largest size the present data allow",
             "prior": "its prior's typical size"}.get(rec.get("ranked_size") or "",
                                                      "its fitted size")
