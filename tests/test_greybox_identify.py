@@ -314,7 +314,7 @@ def test_lubricant_stage_recovers_film_from_periodic_record() -> None:
         c1 * 80e-9 / (c1 + 80e-9), rel=0.02)
 
 
-@pytest.mark.parametrize("channel", ["u_B", "u_B_DE"])
+@pytest.mark.parametrize("channel", ["u_B", "u_B_DE", "u_W"])
 def test_a_flat_recorded_channel_is_refused_with_its_name(channel: str) -> None:
     # a disconnected probe records zeros: its H1 has no power to whiten by (the detective
     # ended in "Residuals are not finite" on such a u_B_DE); one InputError naming it
@@ -326,7 +326,10 @@ def test_a_flat_recorded_channel_is_refused_with_its_name(channel: str) -> None:
     y = rng.standard_normal(n)
     names = ("u_U", "u_V", "u_W", "u_B", "u_B_DE")
     flat = np.zeros(n)
-    rows = [x, (flat if channel == "u_B" else y)[None], (flat if channel == "u_B_DE" else y)[None]]
+    # a dead terminal probe (u_W) made every H1 bin invalid and was reported as "u_B"
+    xs = np.vstack([x[:2], flat[None]]) if channel == "u_W" else x
+    rows = [xs, (flat if channel == "u_B" else y)[None],
+            (flat if channel == "u_B_DE" else y)[None]]
     rec = Recording(fs, np.vstack(rows), names, 300.0)
     with pytest.raises(InputError, match=f"{channel} of the recording at 300 rpm"):
         prep = prepare_recording(rec, nperseg=2048)
@@ -336,7 +339,8 @@ def test_a_flat_recorded_channel_is_refused_with_its_name(channel: str) -> None:
     # a measured channel of the same record passes
     good = prepare_output(prep, y, channel) if channel == "u_B_DE" else prep
     assert bearing_term(good, NetSpec(), P0, "rotating",
-                        quantity=RECORD_QUANTITIES[channel]).n_residuals > 0
+                        quantity=RECORD_QUANTITIES[channel if channel == "u_B_DE"
+                                                   else "u_B"]).n_residuals > 0
 
 
 def test_lubricant_starts_add_the_insulating_film_once() -> None:

@@ -284,6 +284,14 @@ def prepare_recording(rec: Recording, f_cut_hz: float = F_CUT_HZ,
     """Filter (brickwall), transform and H1-analyse a recording (paper Sec. II-C, III-C)."""
     fs = rec.fs
     x = brickwall_filter(rec.terminals, fs, f_cut_hz)
+    for name, row in zip(("u_U", "u_V", "u_W"), x, strict=True):
+        # a flat terminal channel leaves no H1 bin valid, which read as "u_B carries no
+        # signal" and named the wrong channel
+        if float(np.std(row)) <= 1e-9 * float(np.max(np.abs(row), initial=1e-300)):
+            raise InputError("recorded channel carries no signal", source=rec.source,
+                             place=f"{name} of the recording at "
+                                   f"{float(rec.speed_rpm or 0.0):g} rpm",
+                             found="a constant voltage", expected="a measured terminal voltage")
     n = x.shape[1]
     freq = sfft.rfftfreq(n, 1.0 / fs)
     sel = freq <= min(f_cut_hz, fs / 2)
