@@ -281,6 +281,14 @@ def main(argv: list[str] | None = None) -> int:
                          "endwinding_capacitance, what the detective finds on these benches)")
     a = ap.parse_args(argv)
     from benches.independent import write_bench
+    from vfmodel.errors import InputError
+    from vfmodel.greybox.effects import check_effects
+
+    extra = tuple(e for e in a.effects.split(",") if e)
+    try:  # refused before any bench is written or fitted
+        check_effects(extra, "--effects")
+    except InputError as err:
+        ap.error(str(err))
 
     jobs: list[tuple[str, int | None]] = []
     for s in (int(x) for x in a.seeds.split(",") if x):
@@ -295,7 +303,6 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        extra = tuple(e for e in a.effects.split(",") if e)
         futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
