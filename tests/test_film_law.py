@@ -202,6 +202,58 @@ def test_free_description_has_the_per_speed_names(law_family: pmsm.PmsmFamily) -
     assert len(fn) - len(ln) == 2
 
 
+def test_unrecorded_speed_follows_the_law_and_the_recorded_trend() -> None:
+    """At a speed that was not recorded: the governed values from the law (computed by
+    hand), a value free per speed from the power law through its copies (copies made
+    with a known exponent: recovered to rounding), the constants as they are."""
+    law = FilmLaw((0.0, 100.0, 200.0, 500.0))
+    p = _law_params(law, law.speeds).with_values({
+        ref_name("lubricant.C_1"): 3e-9, exp_name("lubricant.C_1"): math.exp(0.4),
+        ref_name("lubricant.R_1"): 2e4, exp_name("lubricant.R_1"): math.exp(1.3),
+        "lubricant.tau_d": 2e-6, "lubricant.k_d": 0.3,
+        **{"bearing.C_edge" + speed_tag(s): 5e-10 * (s / 100) ** -0.25 for s in law.speeds},
+        **{"lubricant.R_2" + speed_tag(s): 300.0 * (s / 100) ** 0.5 for s in law.speeds}})
+    fam = SimpleNamespace(law=law)
+    for rpm in (50.0, 1000.0, 333.0):
+        ps = pmsm.PmsmFamily.at_speed(fam, p, rpm)  # type: ignore[arg-type]
+        x = rpm / law.n_ref
+        assert ps["lubricant.C_1"] == pytest.approx(3e-9 * x**-0.4, rel=1e-12)
+        assert ps["lubricant.R_1"] == pytest.approx(2e4 * x**1.3, rel=1e-12)
+        assert ps["lubricant.k_d"] == pytest.approx(0.3, rel=1e-12)
+        assert ps["bearing.C_edge"] == pytest.approx(5e-10 * (rpm / 100) ** -0.25, rel=1e-9)
+        assert ps["lubricant.R_2"] == pytest.approx(300.0 * (rpm / 100) ** 0.5, rel=1e-9)
+    # a recorded speed keeps its copies
+    at_200 = pmsm.PmsmFamily.at_speed(fam, p, 200.0)  # type: ignore[arg-type]
+    assert at_200["bearing.C_edge"] == p["bearing.C_edge" + speed_tag(200.0)]
+
+
+def test_recordings_at_other_speeds_are_recommended_with_the_law(
+        law_family: pmsm.PmsmFamily) -> None:
+    """With the law, a recording at half the lowest and twice the highest rotating speed
+    is offered (pmsm_null: 100 and 300 rpm -> 50 and 600); its separation is the whitened
+    difference of the two networks' u_B transfers there: 0 for the same network, > 0 for a
+    film twice as thick (C_1 halved). Without the law it is not offered."""
+    from vfmodel.detective.recommend import Comparison, Net, _separations, recommend
+
+    p = law_family.start
+    thick = p.with_values({ref_name("lubricant.C_1"): 0.5 * p[ref_name("lubricant.C_1")]})
+    f = np.geomspace(1e3, 1e7, 11)
+    same = _separations(law_family, Net((), p), Net((), p), (), 0.005, f)
+    other = _separations(law_family, Net((), thick), Net((), p), (), 0.005, f)
+    new = {k for k in other if k[0] == "recording:speed"}
+    assert new == {("recording:speed", 50.0), ("recording:speed", 600.0)}
+    for k in new:
+        assert same[k][0] == 0.0 and other[k][0] > 1.0, (k, same[k][0], other[k][0])
+        assert "film law" in other[k][3]
+    # the ranked list keeps the more separating of the two; without the law none
+    recs = recommend(law_family, [Comparison(("y",), Net((), thick), Net((), p), 1)])
+    best = [r for r in recs if r.measurement == "recording:speed"]
+    assert len(best) == 1 and best[0].expected_delta_chi2 == max(other[k][0] for k in new)
+    free = recommend(law_family.free_description(),
+                     [Comparison(("y",), Net((), thick), Net((), p), 1)])
+    assert not any(r.measurement == "recording:speed" for r in free)
+
+
 def test_film_law_with_a_user_model_is_refused() -> None:
     """The law is one of the PMSM model's lubricant film: with ``--model`` one message."""
     from vfmodel.pipeline.diagnose import run_diagnose

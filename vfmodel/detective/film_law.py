@@ -67,7 +67,8 @@ from vfmodel.detective.shaft_frame import speed_tag
 from vfmodel.errors import InputError
 from vfmodel.greybox.params import ParamSet, ParamSpec
 
-__all__ = ["CONSTANT", "POWER", "FilmLaw", "compare_free", "film_law_json", "speed_tag"]
+__all__ = ["CONSTANT", "POWER", "FilmLaw", "compare_free", "film_law_json", "speed_tag",
+           "unrecorded_speed"]
 
 ArrF = NDArray[np.float64]
 
@@ -216,6 +217,27 @@ class FilmLaw:
             if n in params and all(c in params for c in copies):
                 vals[n] = float(np.exp(np.mean(np.log([params[c] for c in copies]))))
         return self.realise(params.with_values(vals, clip=True))
+
+
+def unrecorded_speed(law: FilmLaw, params: ParamSet | Mapping[str, float],
+                     names: Iterable[str], rpm: float) -> dict[str, float]:
+    """Values at ``rpm``, a rotating speed that was not recorded, of the speed-dependent
+    ``names``: those the law governs from the law; the others (free per speed: the
+    thickener layer, contact resistance, edge capacitance) from a power law through their
+    per-speed copies at the recorded speeds (least squares in ``ln value`` against
+    ``ln speed``, the law's own form; this is what the network predicts for a speed that
+    was not recorded, not a fitted law). Names without copies at every recorded speed
+    are left out."""
+    out = law.values_at(params, rpm)
+    t = np.log(np.asarray(law.speeds))
+    for n in names:
+        copies = [n + speed_tag(s) for s in law.speeds]
+        if n in out or n in CONSTANT or not all(c in params for c in copies):
+            continue
+        y = np.log([params[c] for c in copies])
+        slope, icpt = np.polyfit(t, y, 1)
+        out[n] = float(np.exp(icpt + slope * math.log(rpm)))
+    return out
 
 
 def film_law_json(law: FilmLaw, fit: Any) -> dict[str, Any]:

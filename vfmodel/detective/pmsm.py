@@ -56,7 +56,7 @@ from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.job_pool import JobPool
 from vfmodel.core.progress import Progress, no_progress
-from vfmodel.detective.film_law import FilmLaw
+from vfmodel.detective.film_law import FilmLaw, unrecorded_speed
 from vfmodel.detective.noise import spectrum_noise
 from vfmodel.detective.problem import Candidate, Channel, split_channels
 from vfmodel.detective.record_channels import (
@@ -224,12 +224,19 @@ class PmsmFamily:
         return bearing_state(rpm, _structure(self.base_effects, applied))
 
     def at_speed(self, params: ParamSet, rpm: float) -> ParamSet:
-        """Parameters of the network at ``rpm`` (per-speed lubricant copies substituted)."""
+        """Parameters of the network at ``rpm`` (per-speed lubricant copies substituted).
+
+        With the film law, also at a rotating speed that was not recorded (a recommended
+        recording, :mod:`vfmodel.detective.recommend`): the governed values from the law,
+        the other speed-dependent ones from a power law through their recorded copies
+        (:func:`vfmodel.detective.film_law.unrecorded_speed`)."""
         if rpm <= 0:
             return params
         tag = speed_tag(rpm)
         vals = {n: params[n + tag] for n in _LUB_ALL if n + tag in params}
-        if self.law is not None:        # the governed values from the law
+        if self.law is not None and rpm not in self.law.speeds:
+            vals = unrecorded_speed(self.law, params, _LUB_ALL, rpm)
+        elif self.law is not None:        # the governed values from the law
             vals.update({n: v for n, v in self.law.values_at(params, rpm).items()
                          if n + tag in params})
         return params.with_values(vals, clip=True)

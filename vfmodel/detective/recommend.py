@@ -33,9 +33,13 @@ network predicts, :mod:`vfmodel.greybox.assembly`):
   scaled so that the channel has the signal-to-noise ratio of the bearing-voltage channel
   (norm of the measured ``u_B`` H1 over that of the network's ``i_CM`` transfer).
 - ``recording:speed`` at 0 rpm when the dataset has no standstill recording: ``u_B`` with
-  the bearing in its standstill state, whitened like the lowest recorded speed. Other
-  speeds are not offered: the network has no values for the lubricant at a speed that was
-  not recorded (the per-speed film is fitted freely), so it cannot predict them.
+  the bearing in its standstill state, whitened like the lowest recorded speed. With the
+  film law (``--film-law``) also at half the lowest and twice the highest rotating speed
+  recorded (:data:`NEW_SPEED_LOW`, :data:`NEW_SPEED_HIGH`), whitened like that speed: the
+  law gives the film there, and the values that stay free per speed follow a power law
+  through their recorded ones (:func:`vfmodel.detective.film_law.unrecorded_speed`).
+  Without the law other speeds are not offered: the per-speed film is fitted freely, so
+  the network has no values for a speed that was not recorded.
 
 Measurements the dataset already holds are not recommended. ``dv/dt`` and temperature
 recordings are not offered: the network has no parameter that depends on either. Each
@@ -125,6 +129,10 @@ IMPEDANCE_SIGMA_DEFAULT = 0.005
 spectra to estimate it from (0.5 % and 5 mrad, an impedance analyser's basic accuracy)."""
 
 _CHANNELS = ("u_B_DE", "u_B", "i_CM")
+
+NEW_SPEED_LOW, NEW_SPEED_HIGH = 0.5, 2.0
+"""With the film law, recordings are also offered at these multiples of the lowest and the
+highest rotating speed recorded (a film law is checked best where it extrapolates)."""
 
 
 @dataclass(frozen=True)
@@ -444,13 +452,24 @@ def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]
                                                        1e-300)
             d = float(np.sum(np.abs(bt.weigh(g * (ha["i_CM"] - hb["i_CM"]))) ** 2))
             out[("channel:i_CM", rpm)] = (d, f.size, m, noise + ", at the SNR of u_B")
+    new: list[tuple[float, int, str]] = []    # (speed, bearing term to weigh by, note)
     if bts and 0.0 not in speeds:
-        bt = bts[0]
+        new.append((0.0, 0, ""))
+    rot = [i for i, s in enumerate(speeds) if s > 0]
+    if getattr(family, "law", None) is not None and rot:
+        lo, hi = min(rot, key=lambda i: speeds[i]), max(rot, key=lambda i: speeds[i])
+        note = "; the film there from the film law, the values free per speed from a " \
+               "power law through the recorded ones"
+        new += [(NEW_SPEED_LOW * speeds[lo], lo, note), (NEW_SPEED_HIGH * speeds[hi], hi, note)]
+    for rpm, i, note in new:
+        if ("recording:speed", rpm) in have:
+            continue
+        bt = bts[i]
         f = bt.freq_hz
-        d = float(np.sum(np.abs(bt.weigh(_transfers(family, a, 0.0, f)["u_B"]
-                                         - _transfers(family, b, 0.0, f)["u_B"])) ** 2))
-        out[("recording:speed", 0.0)] = (d, f.size, 2 * bt.h_meas.size,
-                                         rec_noise.format(f"{speeds[0]:g} rpm"))
+        d = float(np.sum(np.abs(bt.weigh(_transfers(family, a, rpm, f)["u_B"]
+                                         - _transfers(family, b, rpm, f)["u_B"])) ** 2))
+        out[("recording:speed", rpm)] = (d, f.size, 2 * bt.h_meas.size,
+                                         rec_noise.format(f"{speeds[i]:g} rpm") + note)
     return out
 
 
