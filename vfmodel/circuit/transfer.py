@@ -232,6 +232,10 @@ class TransferMemo:
         """Set by a fit that moves only a few elements (:mod:`vfmodel.circuit.lowrank`):
         used for element values it applies to, on the frequencies it was made for."""
 
+    def forget(self) -> None:
+        """Drop the entry and the low-rank form (the next call solves the network)."""
+        self._key, self._value, self.lowrank = b"", None, None
+
     def entry(self) -> tuple[bytes, ArrC] | None:
         """The memo's entry (key, value), e.g. to hand it from a worker process back."""
         return None if self._value is None else (self._key, self._value)
