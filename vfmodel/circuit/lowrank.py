@@ -142,7 +142,15 @@ class LowRankTransfer:
 def low_rank_transfer(mna: MnaSystem, b: ArrF, cout: ArrF, v0: ArrF, freq_hz: ArrF,
                       moving: ArrI, *, direct: bool = True) -> LowRankTransfer | None:
     """The low-rank form for the elements ``moving`` (None when there are none or one is
-    part of a mutual coupling, whose stamp is not linear in one value)."""
+    part of a mutual coupling, whose stamp is not linear in one value).
+
+    ``direct``: the reference transfers from sparse solves (exact); else from the
+    pole-residue form of :func:`vfmodel.circuit.transfer.transfer_on`, whose check is
+    relative to the largest of the stacked responses (here the impedances ``M`` of the
+    touched nodes), so that the small transfers ``h0``, ``w`` can be off by far more than
+    its tolerance; the update amplifies that error where ``D^-1 + M`` is nearly singular
+    (measured on a PMSM network: 2.8 % of the bearing transfer after a contact
+    resistance moved 0.001 -> 53 ohm, against 3e-8 with exact references)."""
     moving = np.unique(np.asarray(moving, dtype=np.intp))
     mut = set(mna.mut_params.tolist()) | set(mna.mut_l1.tolist()) | set(mna.mut_l2.tolist())
     if moving.size == 0 or mut & set(moving.tolist()):
