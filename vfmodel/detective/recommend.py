@@ -42,7 +42,11 @@ network predicts, :mod:`vfmodel.greybox.assembly`):
   the network has no values for a speed that was not recorded.
 
 Measurements the dataset already holds are not recommended. ``dv/dt`` and temperature
-recordings are not offered: the network has no parameter that depends on either. Each
+recordings are not offered: no parameter of the network depends on the edge rate, and
+while the film law's thickness would follow the oil's viscosity at another temperature
+(``h ~ (eta_0 u)^0.67``, an equivalent speed), the film resistance also follows the oil's
+resistivity and the relaxation ``k_d``, ``tau_d`` the temperature, by laws the dataset
+does not give. Each
 (effect, measurement) keeps its most separating speed; the list is ranked by
 ``expected_delta_chi2``, largest first. ``decisive`` marks a separation above the
 detective's own acceptance, ``10 + k ln m`` (``k`` the effect's parameters, ``m`` the
