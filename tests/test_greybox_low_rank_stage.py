@@ -90,6 +90,21 @@ def test_low_rank_error_solves_0_hz_directly(term: RecordTerm,
     term.drop_low_rank()
 
 
+def test_a_form_is_reused_only_where_it_applies(term: RecordTerm) -> None:
+    """Reused when the fixed elements and bins are the same (exact there: the references
+    hold for any film values); a form made where a machine value differs is not taken."""
+    lub = lubricant_names(P0, term.spec.effects)
+    assert term.use_low_rank(P0, lub)
+    form = term.low_rank
+    assert term.use_low_rank(MOVED, lub, reuse=form) and term.low_rank is form
+    exact = _sparse(term, MOVED)
+    np.testing.assert_allclose(term.transfer_bins(MOVED), exact, rtol=0,
+                               atol=1e-9 * np.abs(exact).max())
+    other = P0.with_values({"airgap.C_rf": 2 * P0["airgap.C_rf"]})
+    assert term.use_low_rank(other, lub, reuse=form) and term.low_rank is not form
+    term.drop_low_rank()
+
+
 def test_a_stage_whose_form_misses_is_fitted_again_without_it(
         term: RecordTerm, monkeypatch: pytest.MonkeyPatch) -> None:
     """One fit when the form holds at the fitted values; a second fit with the network
@@ -104,11 +119,17 @@ def test_a_stage_whose_form_misses_is_fitted_again_without_it(
         term.transfer_bins(MOVED)
         return MOVED, rep
 
-    assert low_rank_stage(term, P0, lub, fit) == (MOVED, rep)
+    p, r, form = low_rank_stage(term, P0, lub, fit)
+    assert (p, r) == (MOVED, rep) and form is not None
     assert seen == [True] and term._memo.lowrank is None
+    # the next speed's stage takes the same form (same network and bins), not a new one
+    seen.clear()
+    p, r, again = low_rank_stage(term, MOVED, lub, fit, reuse=form)
+    assert again is form and seen == [True]
     seen.clear()
     monkeypatch.setattr(RecordTransfer, "low_rank_error", lambda self, p: 2 * LOW_RANK_TOL)
-    assert low_rank_stage(term, P0, lub, fit) == (MOVED, rep)
+    p, r, _ = low_rank_stage(term, P0, lub, fit)
+    assert (p, r) == (MOVED, rep)
     assert seen == [True, False] and term._memo.lowrank is None
     exact = _sparse(term, MOVED)
     np.testing.assert_allclose(term.transfer_bins(MOVED), exact, rtol=0,

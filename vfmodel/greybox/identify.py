@@ -70,6 +70,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState, check_choice
+from vfmodel.circuit.lowrank import LowRankTransfer
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.job_pool import JobPool
@@ -405,26 +406,32 @@ def _best_of(starts: Sequence[ParamSet], terms: Sequence[tuple[Term, float]],
 
 
 def low_rank_stage(term: BearingTerm | RecordTerm, params: ParamSet, names: Sequence[str],
-                   fit: Callable[[], tuple[ParamSet, StageReport]]
-                   ) -> tuple[ParamSet, StageReport]:
+                   fit: Callable[[], tuple[ParamSet, StageReport]],
+                   reuse: LowRankTransfer | None = None
+                   ) -> tuple[ParamSet, StageReport, LowRankTransfer | None]:
     """``fit()`` (a stage that moves only ``names`` from ``params``, the lubricant of one
     speed) with the term's transfer as a low-rank update of its network at ``params``
     (:meth:`vfmodel.greybox.objective.RecordTransfer.use_low_rank`; made before the starts
     are forked, so that they share it), checked at the fitted values: where it misses the
     network there by more than :data:`LOW_RANK_TOL`, the stage is fitted again with the
-    network solved at every evaluation. Afterwards the term solves the network again.
+    network solved at every evaluation. Afterwards the term solves the network again; the
+    form is returned for the next speed (``reuse``: the rotating records of one dataset
+    share the machine and their bins, so one set of reference transfers serves every
+    speed; made once, ~2 s, instead of once per speed).
 
     (With references from the pole-residue form, independent bench 162 with the
     end-winding capacitance at 500 rpm, R_h 0.001 -> 53 ohm, had a resonance at 322 kHz
     that the network does not have, 14 % of the largest transfer; the fit followed it and
     the peak came out 50 % high.)"""
-    for low_rank in (term.use_low_rank(params, names), False):
+    form = None
+    for low_rank in (term.use_low_rank(params, names, reuse), False):
+        form = term.low_rank if low_rank else form
         out = fit()
         if not low_rank or term.low_rank_error(out[0]) <= LOW_RANK_TOL:
             break
         term.drop_low_rank()
     term.drop_low_rank()
-    return out
+    return (*out, form)
 
 
 # ----------------------------------------------------------------------------- driver
@@ -624,6 +631,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             input_noise=input_noise), None))
     lub = lubricant_names(p, eff)
     cur = p
+    form: LowRankTransfer | None = None
     for s in sorted(prep):
         if s in stand:
             continue
@@ -632,9 +640,9 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             else None
         starts = _lubricant_starts(cur, prep[s], eff)
         lterm: BearingTerm | RecordTerm = rterm if rterm is not None else bterm
-        fit_p, rep = low_rank_stage(lterm, cur, lub, partial(
+        fit_p, rep, form = low_rank_stage(lterm, cur, lub, partial(
             _best_of, starts, [(lterm, 1.0)], lub, f"lubricant {s:g} rpm", max_nfev,
-            prior_sigma, progress, parameter_priors(dataset, s) if priors else None))
+            prior_sigma, progress, parameter_priors(dataset, s) if priors else None), form)
         stages.append(rep)
         fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep, rterm))
         cur = fit_p

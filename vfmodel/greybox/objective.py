@@ -384,11 +384,16 @@ class RecordTransfer:
         h = self.mna.solve(np.array([float(freq_hz)]), self.b, self.cout, v).h
         return float(abs(np.sum(h[0, 0, :])))
 
-    def use_low_rank(self, params: ParamSet, names: Sequence[str]) -> bool:
+    def use_low_rank(self, params: ParamSet, names: Sequence[str],
+                     reuse: LowRankTransfer | None = None) -> bool:
         """Prepare the transfer for fits that move only ``names`` from ``params`` (the
         lubricant of one speed): a low-rank update of the network at ``params``
         (:mod:`vfmodel.circuit.lowrank`), used while the other elements keep their values.
         False when the form cannot be made (nothing moves, or a mutual coupling does).
+        ``reuse``: a form made for another term of the same network (the previous speed's
+        record) is taken as it is when it applies here (the same moving elements, the
+        fixed ones at the same values, the same bins): its references hold for any values
+        of the moving elements.
 
         The reference transfers come from sparse solves on every bin (~2 s for 10^4 bins
         of the PMSM network), not from the pole-residue form (~0.1 s): the update amplifies
@@ -401,10 +406,21 @@ class RecordTransfer:
         result with :meth:`low_rank_error`."""
         self._memo.forget()
         v = values_of(params, self.spec, self.state, sources=True)
-        dl = dlogv_dlogp(params, names, self.spec, self.state, sources=True)
-        self._memo.lowrank = low_rank_transfer(self.mna, self.b, self.cout, v,
-                                               self.prep.bins_hz, _used_elements(dl))
+        moving = _used_elements(dlogv_dlogp(params, names, self.spec, self.state,
+                                            sources=True))
+        if reuse is not None and np.array_equal(reuse.moving, np.unique(moving)) and \
+                reuse.applies(v, self.prep.bins_hz) and \
+                reuse.h0.shape[1:] == (self.cout.shape[1], self.b.shape[1]):
+            self._memo.lowrank = reuse
+        else:
+            self._memo.lowrank = low_rank_transfer(self.mna, self.b, self.cout, v,
+                                                   self.prep.bins_hz, moving)
         return self._memo.lowrank is not None
+
+    @property
+    def low_rank(self) -> LowRankTransfer | None:
+        """The low-rank form in use (:meth:`use_low_rank`), or None."""
+        return self._memo.lowrank
 
     def low_rank_error(self, params: ParamSet) -> float:
         """Largest difference, over the record's bins, between the low-rank transfer at
