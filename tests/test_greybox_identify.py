@@ -105,6 +105,35 @@ def test_transfer_solves_directly_only_below_the_valid_band(
     assert np.max(np.abs(h - ref)) <= 1e-5 * np.max(np.abs(ref))
 
 
+def test_transfer_solves_below_the_checks_directly(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a form that passes every check (1 kHz up) is not used at 0 Hz and 500 Hz, which no
+    # check covers: those are solved directly, the rest taken from the form (reference:
+    # the frequencies handed to the solver, and direct solves at every frequency)
+    import vfmodel.circuit.transfer as tr
+
+    c = build_network(P0, state="rotating", sources=True)
+    mna = c.mna
+    b, cout = mna.input_matrix(list(SOURCES)), mna.output_matrix([BEARING_NODE])
+    solved: list[np.ndarray] = []
+    solve = type(mna).solve
+
+    def spy(self: object, f: np.ndarray, *a: object, **k: object) -> object:
+        solved.append(np.atleast_1d(f))
+        return solve(self, f, *a, **k)  # type: ignore[arg-type]
+
+    f = cast(NDArray[np.float64], np.arange(0, 2001) * 500.0)
+    pr, valid_from = tr._checked_form(mna, b, cout, mna.values0, tr._F_CHECK_HZ,
+                                      (1e10, 1e9, 1e11), tr.TRANSFER_CHECK_TOL)
+    assert pr is not None and valid_from <= 1e3
+    monkeypatch.setattr(type(mna), "solve", spy)
+    h = tr.transfer_on(mna, b, cout, mna.values0, f)
+    direct = [x for x in solved if x.size <= 2]
+    assert len(direct) == 1 and np.array_equal(direct[0], [0.0, 500.0])
+    ref = solve(mna, f, b, cout, mna.values0).h
+    np.testing.assert_allclose(h[:2], ref[:2], rtol=0, atol=1e-12 * np.abs(ref).max())
+    assert np.max(np.abs(h - ref)) <= 1e-5 * np.max(np.abs(ref))
+
+
 @pytest.mark.parametrize("state", ["standstill", "rotating"])
 def test_fitted_residue_form_matches_direct_solves(
         state: str, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -52,7 +52,8 @@ def test_low_rank_error_against_sparse_solves(term: RecordTerm) -> None:
     assert lr is not None
     v = values_of(MOVED, term.spec, term.state, sources=True)
     own = np.abs(lr(v) - exact).max() / scale
-    assert own <= 1e-5
+    assert own <= 1e-8          # exact references: rounding (measured 6e-12)
+    # the check compares with transfer_on, accurate here to ~4e-9 of the largest transfer
     assert term.low_rank_error(MOVED) == pytest.approx(own, abs=1e-7)
     bad = replace(lr, m=lr.m * (1 + 1e-3))
     term._memo.lowrank = bad
@@ -65,29 +66,6 @@ def test_low_rank_error_against_sparse_solves(term: RecordTerm) -> None:
     term.drop_low_rank()
     assert term._memo.lowrank is None
     np.testing.assert_allclose(term.transfer_bins(MOVED), exact, rtol=0, atol=1e-6 * scale)
-
-
-def test_low_rank_error_solves_0_hz_directly(term: RecordTerm,
-                                             monkeypatch: pytest.MonkeyPatch) -> None:
-    """The pole-residue form is least accurate at 0 Hz (2e-4 of the largest transfer on
-    independent bench 119): a form that is off there by 1e-3 does not make an exact
-    low-rank update look wrong, because that bin is solved directly."""
-    import vfmodel.greybox.objective as objective
-
-    real = objective.transfer_on
-
-    def off_at_dc(*args: object) -> np.ndarray:
-        h = np.array(real(*args))  # type: ignore[arg-type]
-        h[0] *= 1 + 1e-3
-        return h
-
-    lub = lubricant_names(P0, term.spec.effects)
-    assert term.use_low_rank(P0, lub) and term.prep.bins_hz[0] == 0.0
-    own = term.low_rank_error(MOVED)
-    monkeypatch.setattr(objective, "transfer_on", off_at_dc)
-    assert term.low_rank_error(MOVED) == pytest.approx(own, abs=1e-9)
-    assert own <= 1e-5
-    term.drop_low_rank()
 
 
 def test_a_form_is_reused_only_where_it_applies(term: RecordTerm) -> None:

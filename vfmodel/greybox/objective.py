@@ -431,14 +431,7 @@ class RecordTransfer:
         v = values_of(params, self.spec, self.state, sources=True)
         if lr is None or not lr.applies(v, self.prep.bins_hz):
             return 0.0
-        f = self.prep.bins_hz
-        exact = transfer_on(self.mna, self.b, self.cout, v, f)
-        # the pole-residue form is least accurate at 0 Hz (slow, nearly cancelling poles:
-        # up to 2e-4 of the largest transfer on independent bench 119, 4e-8 from 1 kHz up):
-        # that bin is solved directly
-        dc = f == 0
-        if np.any(dc):
-            exact[dc] = self.mna.solve(f[dc], self.b, self.cout, v, method="dense").h
+        exact = transfer_on(self.mna, self.b, self.cout, v, self.prep.bins_hz)
         scale = max(float(np.max(np.abs(exact))), 1e-300)
         return float(np.max(np.abs(lr(v) - exact)) / scale)
 
