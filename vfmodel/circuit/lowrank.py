@@ -77,6 +77,8 @@ class LowRankTransfer:
         if freq_hz is not None and not (freq_hz is self.freq_hz or np.array_equal(
                 np.asarray(freq_hz, dtype=float), self.freq_hz)):
             return False
+        if np.shape(v) != self.v0.shape:         # another network
+            return False
         fixed = np.ones(self.v0.size, dtype=bool)
         fixed[self.moving] = False
         return bool(np.array_equal(v[fixed], self.v0[fixed]))

@@ -423,13 +423,12 @@ def low_rank_stage(term: BearingTerm | RecordTerm, params: ParamSet, names: Sequ
     end-winding capacitance at 500 rpm, R_h 0.001 -> 53 ohm, had a resonance at 322 kHz
     that the network does not have, 14 % of the largest transfer; the fit followed it and
     the peak came out 50 % high.)"""
-    form = None
-    for low_rank in (term.use_low_rank(params, names, reuse), False):
-        form = term.low_rank if low_rank else form
-        out = fit()
-        if not low_rank or term.low_rank_error(out[0]) <= LOW_RANK_TOL:
-            break
+    term.use_low_rank(params, names, reuse)
+    form = term.low_rank
+    out = fit()
+    if term.low_rank_error(out[0]) > LOW_RANK_TOL:      # 0 without a form
         term.drop_low_rank()
+        out = fit()
     term.drop_low_rank()
     return (*out, form)
 
