@@ -73,3 +73,4 @@ def test_low_rank_divider_analytic_and_applies() -> None:
     w[mna.param_names.index("R1")] = 2e3          # a fixed element moved: not applicable
     assert not lr.applies(w)
     assert not lr.applies(v, F[:-1])               # other frequencies: not applicable
+    assert not lr.applies(np.r_[v, 1.0])           # another network's values

@@ -232,7 +232,7 @@ def unrecorded_speed(law: FilmLaw, params: ParamSet | Mapping[str, float],
     t = np.log(np.asarray(law.speeds))
     for n in names:
         copies = [n + speed_tag(s) for s in law.speeds]
-        if n in out or n in CONSTANT or not all(c in params for c in copies):
+        if n in out or not all(c in params for c in copies):  # (constants: in out)
             continue
         y = np.log([params[c] for c in copies])
         slope, icpt = np.polyfit(t, y, 1)
