@@ -107,6 +107,7 @@ if TYPE_CHECKING:
         mape_pct,
         peak_errors,
         peak_v,
+        settled_window,
         spectral_corr,
         spectral_corr_periodogram,
     )
@@ -218,6 +219,7 @@ _EXPORTS: dict[str, str] = {
     "mape_pct": "metrics",
     "peak_errors": "metrics",
     "peak_v": "metrics",
+    "settled_window": "metrics",
     "spectral_corr": "metrics",
     "spectral_corr_periodogram": "metrics",
     "BANDS_HZ": "blackbox",
@@ -305,6 +307,7 @@ __all__ = [
     "pwm_edges",
     "quiet_noise_psd",
     "record_term",
+    "settled_window",
     "spectral_corr",
     "spectral_corr_periodogram",
     "steady_output",

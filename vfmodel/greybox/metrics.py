@@ -13,7 +13,14 @@ Definitions (the numbers written to ``results.json``):
     same weight (as in the MAPE) instead of letting the largest impedance values dominate;
     like every coherence it is insensitive to a common scale factor (the MAPE is not).
 ``peak`` (bearing voltage)
-    ``max |u_B|`` over the record after the 10 MHz FFT brickwall filter.
+    ``max |u_B|`` over the record's settled window (:func:`settled_window`: from
+    ``T_SKIP_S`` = 20 us after its start to ``T_END_S`` = 3 us before its end) after the
+    10 MHz FFT brickwall filter, for the record and every model alike. A model computes the
+    periodic response to the record's terminal voltages; a record that is not periodic
+    (PWM with duty jitter, a record cut from a longer run) starts from a network state that
+    the periodic response does not have, and the brickwall filter rings at the record's
+    wrap-around. Both sit in the window's margins (the record fit leaves the same samples
+    out, :mod:`vfmodel.greybox.record_fit`).
 ``abs_err_v``, ``rel_err_pct``
     ``|peak_model - peak_measured|`` and ``100 * abs_err_v / peak_measured``.
 ``spectral_corr``
@@ -57,6 +64,7 @@ __all__ = [
     "mape_pct",
     "peak_errors",
     "peak_v",
+    "settled_window",
     "spectral_corr",
     "spectral_corr_periodogram",
 ]
@@ -111,6 +119,24 @@ def peak_v(u: ArrayLike, fs: float, *, f_cut_hz: float = F_CUT_HZ,
     return float(np.max(np.abs(x)))
 
 
+T_SKIP_S = 20e-6
+"""Start of a record left out of the comparisons (see ``peak`` in the module docstring):
+the free response of the initial state's fast modes (microseconds) decays within it."""
+T_END_S = 3e-6
+"""End of a record left out: the brickwall filter's ringing at the record's wrap-around."""
+
+
+def settled_window(n: int, fs: float, *, t_skip_s: float = T_SKIP_S,
+                   t_end_s: float = T_END_S) -> slice:
+    """Samples of an ``n``-sample record at ``fs`` compared with a model: without the
+    first ``t_skip_s`` and the last ``t_end_s``; at least the middle half of a short
+    record is kept."""
+    # whole samples (20 us at 100 MS/s is 2000, not ceil(2000.0000000000002))
+    k0 = min(int(np.ceil(round(t_skip_s * fs, 6))), n // 4)
+    k1 = max(n - int(np.ceil(round(t_end_s * fs, 6))), k0 + n // 2)
+    return slice(k0, k1)
+
+
 def peak_errors(peak_model: float, peak_meas: float) -> tuple[float, float]:
     """``(abs_err_v, rel_err_pct)`` of a predicted peak."""
     err = abs(peak_model - peak_meas)
@@ -123,13 +149,16 @@ divider's step after each edge and the film's level between edges; above it the 
 
 
 def plateau_rel_err_pct(u_model: ArrayLike, u_meas: ArrayLike, fs: float, *,
-                        f_max_hz: float = PLATEAU_F_HZ) -> float:
+                        f_max_hz: float = PLATEAU_F_HZ,
+                        window: slice | None = None) -> float:
     """Relative RMS error (%) of the bearing voltage below ``f_max_hz`` (brickwall):
     ``100 ||lp(u_model) - lp(u_meas)|| / ||lp(u_meas)||`` without the mean (DC offset of
     the probe). This is the plateau after each switching edge (the bearing-voltage ratio of
-    the capacitive divider) and the level between edges, without the ringing."""
-    a = brickwall_filter(np.asarray(u_model, dtype=float), fs, f_max_hz)
-    b = brickwall_filter(np.asarray(u_meas, dtype=float), fs, f_max_hz)
+    the capacitive divider) and the level between edges, without the ringing. ``window``:
+    the samples compared (default all; the whole records are filtered)."""
+    w = slice(None) if window is None else window
+    a = brickwall_filter(np.asarray(u_model, dtype=float), fs, f_max_hz)[w]
+    b = brickwall_filter(np.asarray(u_meas, dtype=float), fs, f_max_hz)[w]
     a = a - a.mean()
     b = b - b.mean()
     nb = float(np.linalg.norm(b))

@@ -56,6 +56,7 @@ from vfmodel._choices import BearingState
 from vfmodel.circuit.mna import MnaSystem
 from vfmodel.circuit.transfer import TransferMemo
 from vfmodel.greybox.assembly import BEARING_NODE, SOURCES
+from vfmodel.greybox.metrics import T_END_S, T_SKIP_S, settled_window
 from vfmodel.greybox.network import NetSpec
 from vfmodel.greybox.objective import (
     LogMap,
@@ -204,7 +205,7 @@ def _band_noise_sigma(prep: PreparedRecording, f_min_hz: float = 200e3,
 
 
 def record_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
-                state: BearingState, *, t_skip_s: float = 20e-6, t_end_s: float = 3e-6,
+                state: BearingState, *, t_skip_s: float = T_SKIP_S, t_end_s: float = T_END_S,
                 tau_min_s: float = 5e-6, tau_max_s: float = 10e-3,
                 n_tau: int = 10, f_max_hz: float | None = None) -> RecordTerm:
     """Output-error term of one prepared recording (see the module docstring).
@@ -226,10 +227,8 @@ def record_term(prep: PreparedRecording, spec: NetSpec, params: ParamSet,
         spec_b[n_bins:] = 0.0
         stride = max(1, int(fs / (2.0 * float(prep.bins_hz[n_bins - 1]))))
     y = _resample(spec_b, prep.n_samples, n)
-    k0 = min(int(np.ceil(t_skip_s * fs)), n // 4)
-    k1 = max(n - int(np.ceil(t_end_s * fs)), k0 + n // 2)
-    win = slice(k0, k1)
-    t = np.arange(k0, k1) / fs
+    win = settled_window(n, fs, t_skip_s=t_skip_s, t_end_s=t_end_s)
+    t = np.arange(win.start, win.stop) / fs
     taus = tuple(float(x) for x in np.geomspace(tau_min_s, tau_max_s, n_tau))
     cols = [np.ones(t.size)] + [np.exp(-t / tau) for tau in taus]
     u, s, _ = np.linalg.svd(np.stack(cols, axis=1), full_matrices=False)

@@ -26,6 +26,7 @@ from vfmodel.greybox.drive import CableSpec, InverterSpec, ScopeSpec, steady_sta
 from vfmodel.greybox.metrics import (
     peak_errors,
     peak_v,
+    settled_window,
     spectral_corr,
     spectral_corr_periodogram,
 )
@@ -60,11 +61,15 @@ def check_model_nodes(circ: Circuit, source: str | None = None) -> None:
 
 
 def _summary(fs: float, u_b: ArrF, meas: ArrF | None) -> dict[str, object]:
+    # peaks on the settled window (vfmodel.greybox.metrics): the periodic response of a
+    # record that is not periodic is wrong at its start
+    win = settled_window(u_b.size, fs)
     out: dict[str, object] = {"fs_hz": fs, "n_samples": int(u_b.size),
-                              "peak_model_v": peak_v(u_b, fs, filtered=True),
-                              "rms_model_v": float(np.sqrt(np.mean(u_b**2)))}
+                              "peak_model_v": peak_v(u_b[win], fs, filtered=True),
+                              "rms_model_v": float(np.sqrt(np.mean(u_b**2))),
+                              "compared_s": [win.start / fs, win.stop / fs]}
     if meas is not None:
-        pm = peak_v(meas, fs, filtered=True)
+        pm = peak_v(meas[win], fs, filtered=True)
         a, r = peak_errors(float(out["peak_model_v"]), pm)  # type: ignore[arg-type]
         out.update({"peak_measured_v": pm, "abs_err_v": a, "rel_err_pct": r,
                     "spectral_corr": spectral_corr(u_b, meas, fs),

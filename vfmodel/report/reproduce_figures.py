@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from vfmodel.greybox.metrics import settled_window
 from vfmodel.pipeline.reproduce import ReproduceResult, SpeedResult, rpm_key
 from vfmodel.report._mpl import draw_side_by_side, envelope, pyplot, save
 from vfmodel.signals.filters import F_CUT_HZ
@@ -49,7 +50,8 @@ def _impedance(res: ReproduceResult, out: Path, group: str) -> str | None:
 
 
 def _zoom_window(s: SpeedResult, width_s: float = 6e-6) -> tuple[int, int]:
-    k = int(np.argmax(np.abs(s.u_meas)))
+    w = settled_window(s.u_meas.size, s.fs)      # where the peaks are compared
+    k = w.start + int(np.argmax(np.abs(s.u_meas[w])))
     n = max(int(width_s * s.fs), 16)
     a = max(0, k - n // 3)
     return a, min(s.u_meas.size, a + n)
@@ -65,7 +67,10 @@ def _bearing(s: SpeedResult, out: Path, baseline: bool) -> str:
     if baseline:
         ao.plot(*envelope(t * 1e3, s.u_bvr), lw=0.6,
                 label=f"BVR model ({100 * s.baseline.bvr:.3g} %)")
-    ao.set_xlabel("time (ms)")
+    w = settled_window(s.u_meas.size, s.fs)
+    for lo, hi in ((0.0, w.start / s.fs), (w.stop / s.fs, s.u_meas.size / s.fs)):
+        ao.axvspan(lo * 1e3, hi * 1e3, color="0.85", lw=0)
+    ao.set_xlabel("time (ms); grey: not compared (record start and end)")
     ao.set_ylabel("u_B (V)")
     ao.set_title(f"bearing voltage at {s.speed_rpm:g} rpm: overall")
     az.plot(t[a:b] * 1e6, s.u_meas[a:b], lw=1, label="measured")
