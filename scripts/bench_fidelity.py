@@ -43,8 +43,8 @@ GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.
 
 
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
-         standstill_fit: str = "combined", extra_effects: tuple[str, ...] = ()
-         ) -> dict[str, Any]:
+         standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
+         max_nfev: int = 40) -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
@@ -55,7 +55,8 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
     res = reproduce(read_dataset(path), blackbox=False,
                     effects=tuple(sorted(PAPER_EFFECTS | set(extra_effects))),
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
-                    standstill_fit=standstill_fit).results  # type: ignore[arg-type]
+                    standstill_fit=standstill_fit,  # type: ignore[arg-type]
+                    max_nfev=max_nfev).results
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -279,6 +280,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--effects", default="",
                     help="effects added to the paper's network, comma-separated (e.g. "
                          "endwinding_capacitance, what the detective finds on these benches)")
+    ap.add_argument("--max-nfev", type=int, default=40,
+                    help="evaluation limit of the identification's stages (reproduce's "
+                         "--max-nfev)")
     a = ap.parse_args(argv)
     from benches.independent import write_bench
     from vfmodel.errors import InputError
@@ -303,7 +307,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra): k
+        futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra,
+                          a.max_nfev): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()

@@ -62,6 +62,13 @@ def test_outputs_and_contract_keys(run: tuple[Path, Path, dict[str, Any]]) -> No
         assert set(b["lubricant"]) == {"r_ohm", "c_f"}
         assert b["abs_err_v"] == pytest.approx(abs(b["peak_model_v"] - b["peak_measured_v"]))
         assert b["rel_err_pct"] == pytest.approx(100 * b["abs_err_v"] / b["peak_measured_v"])
+        # peaks on the settled window (20 us after the start to 3 us before the end), a
+        # part of the whole record
+        t0, t1 = b["compared_s"]
+        assert t0 == pytest.approx(20e-6, rel=1e-6) and 0.0 < t1 - t0
+        whole = b["peak_whole_record"]
+        assert b["peak_measured_v"] <= whole["measured_v"]
+        assert b["peak_model_v"] <= whole["model_v"]
         bl = r["baseline_bvr"][k]
         assert set(bl) >= {"bvr", "c_b_f", "peak_model_v", "rel_err_pct"}
     assert r["bearing"]["mean_rel_err_pct_rotating"] == pytest.approx(
