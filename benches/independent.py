@@ -357,9 +357,13 @@ def extra_response(net: Circuit, d: Draw, freq_hz: ArrF, h_terminals: ArrC) -> A
 
 
 def record(d: Draw, speed: float, rng: np.random.Generator, n_periods: int = 8,
-           n_pre: int = 4, extra: dict[str, float] | None = None) -> tuple[ArrF, ArrF]:
+           n_pre: int = 4, extra: dict[str, float] | None = None,
+           start: float = 0.0) -> tuple[ArrF, ArrF]:
     """Noise-free probe outputs (4, n) of the last ``n_periods`` PWM periods of a run of
     ``n_pre + n_periods`` jittered periods, and the first rising edges of phase U.
+    ``start`` (0..1): the record ends that fraction of a PWM period before the run's end,
+    so that it starts anywhere in a period (a scope triggered at random), not at the
+    carrier's start.
 
     With ``extra`` (:func:`draw_extra`) two more rows: ``u_B_DE`` and ``i_CM``
     (:func:`extra_response`), each through its probe."""
@@ -386,7 +390,8 @@ def record(d: Draw, speed: float, rng: np.random.Generator, n_periods: int = 8,
         ye[0] *= _probe(f, extra["probe_bw_B_DE"], 1, extra["skew_B_DE"])
         ye[1] *= _probe(f, extra["probe_bw_I"], 1)
         y = np.concatenate([y, ye])
-    clean = np.fft.irfft(y, n=n_all, axis=1)[:, n_all - round(n_periods * fs / 8e3):]
+    k_end = n_all - round(start * fs / 8e3)
+    clean = np.fft.irfft(y, n=n_all, axis=1)[:, k_end - round(n_periods * fs / 8e3):k_end]
     return clean, edges[0][0]
 
 
@@ -473,9 +478,12 @@ def shaft_frame_impedance(d: Draw, speed: float, freq_hz: ArrF) -> ArrC:
 
 
 def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
-                n_periods: int = 8, extra: bool = False) -> dict[str, object]:
+                n_periods: int = 8, extra: bool = False,
+                random_start: bool = False) -> dict[str, object]:
     """Write bench ``seed`` as a dataset directory ``out`` (atomically); with ``extra`` the
-    further measurements of CONTRACT section 2a as well (see the module docstring)."""
+    further measurements of CONTRACT section 2a as well (see the module docstring); with
+    ``random_start`` every record starts at a random point of a PWM period
+    (:func:`record`'s ``start``, drawn from a generator of its own: the other draws stay)."""
     d = draw(seed)
     ss = np.random.SeedSequence([seed, 77])
     r_imp, r_pwm, r_noise = (np.random.default_rng(s) for s in ss.spawn(3))
@@ -502,7 +510,10 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                 if s > 0:
                     at_speed += ["", "[[impedance_at_speed]]", 'topology = "Shaft-Frame"',
                                  f"speed_rpm = {float(s)}", f'file = "impedance/{name}"']
-        clean = {s: record(d, s, r_pwm, n_periods, extra=ex)[0] for s in speeds}
+        r_start = np.random.default_rng(np.random.SeedSequence([seed, 79]))
+        starts = {s: float(r_start.uniform()) if random_start else 0.0 for s in speeds}
+        clean = {s: record(d, s, r_pwm, n_periods, extra=ex, start=starts[s])[0]
+                 for s in speeds}
         b_rms = float(np.std(clean[min(speeds)][3])) / 10 ** (d.v["snr_b0_db"] / 20)
         toml = [f'name = "independent-bench-{seed}"',
                 'description = "independent virtual bench (benches/independent.py)"',
@@ -541,7 +552,7 @@ def write_bench(out: Path, seed: int, speeds: tuple[float, ...] = SPEEDS,
                                                        d.fs_hz),
                 "spectral_corr_periodogram_ceiling": spectral_corr_periodogram(
                     y[3], noisy[3].astype(np.float32), d.fs_hz),
-                "equivalents": equivalents(d, s)}
+                "equivalents": equivalents(d, s), "record_start_periods": starts[s]}
             if extra:
                 recs[str(round(s))].update({  # type: ignore[attr-defined]
                     "peak_u_b_de_clean_v": float(np.abs(brickwall_filter(

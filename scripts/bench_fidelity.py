@@ -283,6 +283,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-nfev", type=int, default=40,
                     help="evaluation limit of the identification's stages (reproduce's "
                          "--max-nfev)")
+    ap.add_argument("--random-start", action="store_true",
+                    help="benches whose records start at a random point of a PWM period "
+                         "(written as bench<seed>rs)")
     a = ap.parse_args(argv)
     from benches.independent import write_bench
     from vfmodel.errors import InputError
@@ -296,11 +299,11 @@ def main(argv: list[str] | None = None) -> int:
 
     jobs: list[tuple[str, int | None]] = []
     for s in (int(x) for x in a.seeds.split(",") if x):
-        path = Path(a.dir) / f"bench{s}"
+        path = Path(a.dir) / f"bench{s}{'rs' if a.random_start else ''}"
         if not (path / "dataset.toml").exists():
             path.parent.mkdir(parents=True, exist_ok=True)
             t0 = time.perf_counter()
-            write_bench(path, s)
+            write_bench(path, s, random_start=a.random_start)
             print(f"wrote {path} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
         jobs.append((str(path), s))
     jobs += [(d, None) for d in a.dataset]
