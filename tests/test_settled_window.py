@@ -43,6 +43,7 @@ def test_settled_window_margins() -> None:
     assert (w.start, w.stop) == (round(T_SKIP_S * FS), 100_000 - round(T_END_S * FS))
     short = settled_window(40, FS)        # at least the middle half of a short record
     assert short.start == 10 and short.stop - short.start >= 20
+    assert settled_window(1, FS) == slice(0, 1)    # never empty
 
 
 def test_predicted_peak_of_a_cut_record_on_the_settled_window() -> None:

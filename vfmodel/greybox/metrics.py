@@ -133,7 +133,7 @@ def settled_window(n: int, fs: float, *, t_skip_s: float = T_SKIP_S,
     record is kept."""
     # whole samples (20 us at 100 MS/s is 2000, not ceil(2000.0000000000002))
     k0 = min(int(np.ceil(round(t_skip_s * fs, 6))), n // 4)
-    k1 = max(n - int(np.ceil(round(t_end_s * fs, 6))), k0 + n // 2)
+    k1 = max(n - int(np.ceil(round(t_end_s * fs, 6))), k0 + max(1, n // 2))
     return slice(k0, k1)
 
 
