@@ -44,11 +44,12 @@ GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.
 
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
          standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
-         max_nfev: int = 40) -> dict[str, Any]:
+         max_nfev: int = 40, max_nfev_lubricant: int | None = None) -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS
+    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV
     from vfmodel.pipeline.reproduce import reproduce
 
     t0 = time.perf_counter()
@@ -56,7 +57,8 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
                     effects=tuple(sorted(PAPER_EFFECTS | set(extra_effects))),
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit,  # type: ignore[arg-type]
-                    max_nfev=max_nfev).results
+                    max_nfev=max_nfev, max_nfev_lubricant=LUBRICANT_MAX_NFEV
+                    if max_nfev_lubricant is None else max_nfev_lubricant).results
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -283,6 +285,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-nfev", type=int, default=40,
                     help="evaluation limit of the identification's stages (reproduce's "
                          "--max-nfev)")
+    ap.add_argument("--max-nfev-lubricant", type=int, default=None,
+                    help="evaluation limit of each lubricant stage's starts (reproduce's "
+                         "--max-nfev-lubricant; default: reproduce's)")
     ap.add_argument("--random-start", action="store_true",
                     help="benches whose records start at a random point of a PWM period "
                          "(written as bench<seed>rs)")
@@ -311,7 +316,7 @@ def main(argv: list[str] | None = None) -> int:
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra,
-                          a.max_nfev): k
+                          a.max_nfev, a.max_nfev_lubricant): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()

@@ -32,6 +32,9 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")
 @click.option("--max-nfev", default=40, show_default=True, type=click.IntRange(5, 1000),
               help="Function evaluations per identification stage.")
+@click.option("--max-nfev-lubricant", default=None, type=click.IntRange(5, 1000),
+              help="Function evaluations per start of each lubricant (per-speed) stage "
+                   "[default: 100].")
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")
@@ -40,7 +43,8 @@ def _sections(value: str) -> tuple[int, ...]:
                    "`vfmodel diagnose` found: endwinding_capacitance, fixture_inductance.")
 @out_option
 @quiet_option
-def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, priors: bool,
+def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
+              max_nfev_lubricant: int | None, priors: bool,
               add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
     recordings, lubricant per speed), validate it, compare it with the classical BVR model
@@ -49,6 +53,7 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, pr
     from vfmodel.core.atomic import atomic_write_text, staged_output
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
+    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV
     from vfmodel.pipeline.reproduce import reproduce as run
     from vfmodel.report.html import write_reproduce_html
     from vfmodel.report.reproduce_figures import write_figures
@@ -59,7 +64,9 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int, pr
         ds = read_dataset(dataset)
         prog = progress_bar(quiet)
         res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
-                  max_nfev=max_nfev, progress=prog, priors=priors)
+                  max_nfev=max_nfev, progress=prog, priors=priors,
+                  max_nfev_lubricant=LUBRICANT_MAX_NFEV if max_nfev_lubricant is None
+                  else max_nfev_lubricant)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

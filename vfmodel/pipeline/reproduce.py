@@ -55,6 +55,7 @@ from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
 from vfmodel.greybox.identify import (
+    LUBRICANT_MAX_NFEV,
     STANDSTILL_HIDDEN,
     Identification,
     RotatingFit,
@@ -191,11 +192,15 @@ def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
 
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
-              max_nfev: int = 40, progress: Progress = no_progress,
+              max_nfev: int = 40, max_nfev_lubricant: int | None = LUBRICANT_MAX_NFEV,
+              progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
               standstill_fit: StandstillFit = "combined",
               priors: bool = False) -> ReproduceResult:
-    """Run the paper's pipeline on ``dataset`` (see the module docstring). ``priors``: the
+    """Run the paper's pipeline on ``dataset`` (see the module docstring).
+    ``max_nfev``: evaluation limit of the machine stages; ``max_nfev_lubricant``: of each
+    start of a lubricant stage (None: ``max_nfev``; default
+    :data:`vfmodel.greybox.identify.LUBRICANT_MAX_NFEV`). ``priors``: the
     identification is maximum a posteriori with the physical priors
     (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
     if not dataset.impedance:
@@ -205,8 +210,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
-                     progress=progress, rotating_fit=rotating_fit,
-                     standstill_fit=standstill_fit, priors=priors)
+                     max_nfev_lubricant=max_nfev_lubricant, progress=progress,
+                     rotating_fit=rotating_fit, standstill_fit=standstill_fit, priors=priors)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
     # ---- impedance (Table II)
