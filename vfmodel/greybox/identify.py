@@ -148,9 +148,9 @@ speeds 4-7 % off while their neighbours were within 1-2 % (``scripts/bench_fidel
   2.34 %, mean 1.07 -> 0.89 %;
 - ``data/pmsm40kw``: rotating mean 0.262 -> 0.255 %, the other figures unchanged.
 
-A stage whose starts all converge (status 2) before 40 evaluations is not changed. Raising every stage's limit
-to 100 instead made the 28 older benches worse (docs/notes.md, session 21): the machine
-stages keep 40."""
+A stage whose starts all converge (status 2) within 40 evaluations is not changed.
+Raising every stage's limit to 100 instead made the 28 older benches worse (docs/notes.md,
+session 21): the machine stages keep 40."""
 
 STANDSTILL_RECORD_HZ = 1e6
 """Top of the standstill waveform term (``standstill_fit="combined"``): a decade above the
