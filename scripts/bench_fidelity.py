@@ -44,12 +44,13 @@ GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.
 
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
          standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
-         max_nfev: int = 40, max_nfev_lubricant: int | None = None) -> dict[str, Any]:
+         max_nfev: int = 40, max_nfev_lubricant: int | None = None,
+         random_starts: int | None = None) -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS
-    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV
+    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
     from vfmodel.pipeline.reproduce import reproduce
 
     t0 = time.perf_counter()
@@ -58,7 +59,9 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit,  # type: ignore[arg-type]
                     max_nfev=max_nfev, max_nfev_lubricant=LUBRICANT_MAX_NFEV
-                    if max_nfev_lubricant is None else max_nfev_lubricant).results
+                    if max_nfev_lubricant is None else max_nfev_lubricant,
+                    lubricant_random_starts=LUBRICANT_RANDOM_STARTS if random_starts is None
+                    else random_starts).results
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -288,6 +291,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-nfev-lubricant", type=int, default=None,
                     help="evaluation limit of each lubricant stage's starts (reproduce's "
                          "--max-nfev-lubricant; default: reproduce's)")
+    ap.add_argument("--lubricant-random-starts", type=int, default=None,
+                    help="random starts added to each lubricant stage (reproduce's "
+                         "--lubricant-random-starts; default: reproduce's)")
     ap.add_argument("--random-start", action="store_true",
                     help="benches whose records start at a random point of a PWM period "
                          "(written as bench<seed>rs)")
@@ -316,7 +322,7 @@ def main(argv: list[str] | None = None) -> int:
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra,
-                          a.max_nfev, a.max_nfev_lubricant): k
+                          a.max_nfev, a.max_nfev_lubricant, a.lubricant_random_starts): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()

@@ -395,6 +395,27 @@ def test_lubricant_starts_add_the_insulating_film_once() -> None:
     at_top = P0.with_values({"lubricant.R_1": top})
     assert [s["lubricant.R_1"] for s in _lubricant_starts(at_top, prep, eff)].count(top) \
         == len(_lubricant_starts(at_top, prep, eff)) == len(starts) - 1
+    # random starts: appended after the physical ones, film values only, log-normal with
+    # LUBRICANT_RANDOM_SIGMA about the warm start, the same draws on every call
+    from vfmodel.greybox.assembly import lubricant_names
+    from vfmodel.greybox.identify import LUBRICANT_RANDOM_SIGMA
+
+    more = _lubricant_starts(P0, prep, eff, 40)
+    assert len(more) == len(starts) + 40
+    for a, b in zip(more, starts, strict=False):
+        assert np.array_equal(a.values, b.values)
+    lub = set(lubricant_names(P0, eff))
+    logs = []
+    for q in more[len(starts):]:
+        moved = {n for n in P0.names if q[n] != P0[n]}
+        assert moved and moved <= lub
+        logs += [np.log(q[n] / P0[n]) for n in lub
+                 if q[n] != next(s.upper for s in P0.specs if s.name == n)
+                 and q[n] != next(s.lower for s in P0.specs if s.name == n)]
+    # 40 starts x film values (unclipped): the sample spread within 25 % of the stated one
+    assert np.std(logs) == pytest.approx(LUBRICANT_RANDOM_SIGMA, rel=0.25)
+    again = _lubricant_starts(P0, prep, eff, 40)
+    assert all(np.array_equal(a.values, b.values) for a, b in zip(more, again, strict=True))
 
 
 def test_lubricant_stages_have_their_own_evaluation_limit(tmp_path: Path) -> None:

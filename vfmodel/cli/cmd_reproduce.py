@@ -35,6 +35,9 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--max-nfev-lubricant", default=None, type=click.IntRange(5, 1000),
               help="Function evaluations per start of each lubricant (per-speed) stage "
                    "[default: 100].")
+@click.option("--lubricant-random-starts", default=None, type=click.IntRange(0, 50),
+              help="Random starts added to the three physical starts of each lubricant "
+                   "stage [default: 4].")
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")
@@ -44,7 +47,8 @@ def _sections(value: str) -> tuple[int, ...]:
 @out_option
 @quiet_option
 def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
-              max_nfev_lubricant: int | None, priors: bool,
+              max_nfev_lubricant: int | None, lubricant_random_starts: int | None,
+              priors: bool,
               add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
     recordings, lubricant per speed), validate it, compare it with the classical BVR model
@@ -53,7 +57,7 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
     from vfmodel.core.atomic import atomic_write_text, staged_output
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
-    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV
+    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
     from vfmodel.pipeline.reproduce import reproduce as run
     from vfmodel.report.html import write_reproduce_html
     from vfmodel.report.reproduce_figures import write_figures
@@ -66,7 +70,9 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
         res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
                   max_nfev=max_nfev, progress=prog, priors=priors,
                   max_nfev_lubricant=LUBRICANT_MAX_NFEV if max_nfev_lubricant is None
-                  else max_nfev_lubricant)
+                  else max_nfev_lubricant,
+                  lubricant_random_starts=LUBRICANT_RANDOM_STARTS
+                  if lubricant_random_starts is None else lubricant_random_starts)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

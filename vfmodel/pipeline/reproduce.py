@@ -56,6 +56,7 @@ from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
 from vfmodel.greybox.identify import (
     LUBRICANT_MAX_NFEV,
+    LUBRICANT_RANDOM_STARTS,
     STANDSTILL_HIDDEN,
     Identification,
     RotatingFit,
@@ -193,6 +194,7 @@ def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, max_nfev_lubricant: int | None = LUBRICANT_MAX_NFEV,
+              lubricant_random_starts: int = LUBRICANT_RANDOM_STARTS,
               progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
               standstill_fit: StandstillFit = "combined",
@@ -200,7 +202,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     """Run the paper's pipeline on ``dataset`` (see the module docstring).
     ``max_nfev``: evaluation limit of the machine stages; ``max_nfev_lubricant``: of each
     start of a lubricant stage (None: ``max_nfev``; default
-    :data:`vfmodel.greybox.identify.LUBRICANT_MAX_NFEV`). ``priors``: the
+    :data:`vfmodel.greybox.identify.LUBRICANT_MAX_NFEV`); ``lubricant_random_starts``: random
+    starts added to each lubricant stage's physical ones. ``priors``: the
     identification is maximum a posteriori with the physical priors
     (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
     if not dataset.impedance:
@@ -210,7 +213,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
-                     max_nfev_lubricant=max_nfev_lubricant, progress=progress,
+                     max_nfev_lubricant=max_nfev_lubricant,
+                     lubricant_random_starts=lubricant_random_starts, progress=progress,
                      rotating_fit=rotating_fit, standstill_fit=standstill_fit, priors=priors)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
