@@ -38,19 +38,20 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from vfmodel.greybox.effects import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
+
 GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.0,
          "coherence": 0.995, "coverage": 0.90}
 
 
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
          standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
-         max_nfev: int = 40, max_nfev_lubricant: int | None = None,
-         random_starts: int | None = None) -> dict[str, Any]:
+         max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,
+         random_starts: int = LUBRICANT_RANDOM_STARTS) -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS
-    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
     from vfmodel.pipeline.reproduce import reproduce
 
     t0 = time.perf_counter()
@@ -58,10 +59,8 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
                     effects=tuple(sorted(PAPER_EFFECTS | set(extra_effects))),
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit,  # type: ignore[arg-type]
-                    max_nfev=max_nfev, max_nfev_lubricant=LUBRICANT_MAX_NFEV
-                    if max_nfev_lubricant is None else max_nfev_lubricant,
-                    lubricant_random_starts=LUBRICANT_RANDOM_STARTS if random_starts is None
-                    else random_starts).results
+                    max_nfev=max_nfev, max_nfev_lubricant=max_nfev_lubricant,
+                    lubricant_random_starts=random_starts).results
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -288,12 +287,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-nfev", type=int, default=40,
                     help="evaluation limit of the identification's stages (reproduce's "
                          "--max-nfev)")
-    ap.add_argument("--max-nfev-lubricant", type=int, default=None,
+    ap.add_argument("--max-nfev-lubricant", type=int, default=LUBRICANT_MAX_NFEV,
                     help="evaluation limit of each lubricant stage's starts (reproduce's "
-                         "--max-nfev-lubricant; default: reproduce's)")
-    ap.add_argument("--lubricant-random-starts", type=int, default=None,
+                         "--max-nfev-lubricant)")
+    ap.add_argument("--lubricant-random-starts", type=int, default=LUBRICANT_RANDOM_STARTS,
                     help="random starts added to each lubricant stage (reproduce's "
-                         "--lubricant-random-starts; default: reproduce's)")
+                         "--lubricant-random-starts)")
     ap.add_argument("--random-start", action="store_true",
                     help="benches whose records start at a random point of a PWM period "
                          "(written as bench<seed>rs)")

@@ -52,13 +52,3 @@ def test_info_json(tiny_dataset: Path, capsys: pytest.CaptureFixture[str]) -> No
     for topo in ("U-Frame", "V-Frame", "U-V"):
         assert s["impedance"][topo]["noise_pct"] == pytest.approx(0.707, rel=0.2)
 
-
-def test_reproduce_help_states_the_lubricant_defaults(capsys: pytest.CaptureFixture[str]
-                                                      ) -> None:
-    # the CLI spells the defaults it leaves to reproduce(); they must be the library's
-    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
-
-    assert main(["reproduce", "--help"]) == 0
-    text = " ".join(capsys.readouterr().out.split())
-    assert f"lubricant (per-speed) stage [default: {LUBRICANT_MAX_NFEV}]" in text
-    assert f"each lubricant stage [default: {LUBRICANT_RANDOM_STARTS}]" in text

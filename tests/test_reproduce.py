@@ -172,9 +172,14 @@ def test_added_effect_reaches_the_network(run: tuple[Path, Path, dict[str, Any]]
     out = tmp_path / "out"
     assert main(["reproduce", str(ds), "--out", str(out), "--sections", "2", "--max-nfev",
                  "12", "--no-blackbox", "--add-effect", "endwinding_capacitance",
+                 "--max-nfev-lubricant", "5", "--lubricant-random-starts", "0",
                  "--quiet"]) == 0
     m = json.loads((out / "results.json").read_text())["model"]
     assert "endwinding_capacitance" in m["effects"]
+    # the lubricant options reach the fit: its stage stops at the 5 evaluations asked for
+    # (status 0: limit reached; with the defaults this stage converges after 17)
+    lub = [s for s in m["stages"] if s["name"].startswith("lubricant")]
+    assert lub and all(s["nfev"] <= 5 and s["status"] == 0 for s in lub)
     circ = from_spice((out / "network_0rpm.cir").read_text())
     caps = {e.name: e.value for e in circ.elements if e.kind == "capacitor"
             and {e.nodes[0], e.nodes[1]} in ({"U", "V"}, {"V", "W"}, {"W", "U"})}

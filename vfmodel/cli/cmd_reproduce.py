@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
-from vfmodel.greybox.effects import SECTIONS
+from vfmodel.greybox.effects import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS, SECTIONS
 
 REPRODUCE_OUTPUTS = ("results.json", "report.html", "network_*rpm.cir", "fig*.png",
                      "blackbox_errors.png", "poles.png")
@@ -32,12 +32,13 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")
 @click.option("--max-nfev", default=40, show_default=True, type=click.IntRange(5, 1000),
               help="Function evaluations per identification stage.")
-@click.option("--max-nfev-lubricant", default=None, type=click.IntRange(5, 1000),
-              help="Function evaluations per start of each lubricant (per-speed) stage "
-                   "[default: 100].")
-@click.option("--lubricant-random-starts", default=None, type=click.IntRange(0, 50),
+@click.option("--max-nfev-lubricant", default=LUBRICANT_MAX_NFEV, show_default=True,
+              type=click.IntRange(5, 1000),
+              help="Function evaluations per start of each lubricant (per-speed) stage.")
+@click.option("--lubricant-random-starts", default=LUBRICANT_RANDOM_STARTS,
+              show_default=True, type=click.IntRange(0, 50),
               help="Random starts added to the three physical starts of each lubricant "
-                   "stage [default: 4].")
+                   "stage.")
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")
@@ -47,7 +48,7 @@ def _sections(value: str) -> tuple[int, ...]:
 @out_option
 @quiet_option
 def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
-              max_nfev_lubricant: int | None, lubricant_random_starts: int | None,
+              max_nfev_lubricant: int, lubricant_random_starts: int,
               priors: bool,
               add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
@@ -57,7 +58,6 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
     from vfmodel.core.atomic import atomic_write_text, staged_output
     from vfmodel.core.io_dataset import read_dataset
     from vfmodel.greybox.effects import PAPER_EFFECTS, check_effects
-    from vfmodel.greybox.identify import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
     from vfmodel.pipeline.reproduce import reproduce as run
     from vfmodel.report.html import write_reproduce_html
     from vfmodel.report.reproduce_figures import write_figures
@@ -69,10 +69,8 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
         prog = progress_bar(quiet)
         res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
                   max_nfev=max_nfev, progress=prog, priors=priors,
-                  max_nfev_lubricant=LUBRICANT_MAX_NFEV if max_nfev_lubricant is None
-                  else max_nfev_lubricant,
-                  lubricant_random_starts=LUBRICANT_RANDOM_STARTS
-                  if lubricant_random_starts is None else lubricant_random_starts)
+                  max_nfev_lubricant=max_nfev_lubricant,
+                  lubricant_random_starts=lubricant_random_starts)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

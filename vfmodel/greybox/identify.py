@@ -105,8 +105,6 @@ from vfmodel.greybox.record_fit import RecordTerm, record_term
 
 __all__ = [
     "JOINT_TRIGGER",
-    "LUBRICANT_MAX_NFEV",
-    "LUBRICANT_RANDOM_STARTS",
     "SECTIONS",
     "STANDSTILL_HIDDEN",
     "Identification",
@@ -134,43 +132,11 @@ StandstillFit = Literal["combined", "record", "h1"]
 low-passed at :data:`STANDSTILL_RECORD_HZ` (default), the whole waveform, or the H1
 transfer alone."""
 
-LUBRICANT_MAX_NFEV = 100
-"""Evaluation limit of each start of a lubricant stage in ``reproduce`` (the machine
-stages keep ``max_nfev``, 40). A lubricant stage moves only the film of one speed (a
-handful of parameters, each evaluation a low-rank update of the network), so its
-evaluations are cheap, and stopped at 40 the stages that had not converged left single
-speeds 4-7 % off while their neighbours were within 1-2 % (``scripts/bench_fidelity.py
---max-nfev-lubricant 40`` against the default, session 22):
-
-- independent bench 112, 500 rpm: 6.82 -> 0.99 %; bench 131, 300 rpm: 2.69 -> 0.90 %
-  (the BVR model's 1.83 % now beaten); benches 103, 111, 119 within 0.04 points;
-- fresh benches 200-207 with the end-winding capacitance: bench 206 at 300 rpm chi2_red
-  98 -> 57 and 4.37 -> 1.44 %, bench 202 at 300 rpm 4.67 -> 0.67 %; worst speed 4.67 ->
-  2.34 %, mean 1.07 -> 0.89 %;
-- ``data/pmsm40kw``: rotating mean 0.262 -> 0.255 %, the other figures unchanged.
-
-A stage whose starts all converge (status 2) within 40 evaluations is not changed.
-Raising every stage's limit to 100 instead made the 28 older benches worse (docs/notes.md,
-session 21): the machine stages keep 40."""
-
 STANDSTILL_RECORD_HZ = 1e6
 """Top of the standstill waveform term (``standstill_fit="combined"``): a decade above the
 band the H1 estimate leaves nearly free (the switching harmonics and the rotor-current
 path's level, 8 kHz to a few 100 kHz) and well below the top of the band (5-10 MHz), where
 the terminal voltages are near the probe noise and only the H1 term models the bias."""
-
-LUBRICANT_RANDOM_STARTS = 4
-"""Random starts added to each lubricant stage in ``reproduce`` (:func:`_lubricant_starts`:
-the warm start with every film value scaled by ``exp(LUBRICANT_RANDOM_SIGMA N(0, 1))``,
-seeded, the same draws at every speed), beside the three physical starts. The film's fit
-has basins the physical starts miss: regenerated independent bench 112 at 400 rpm ended
-after 3 evaluations at chi2_red 37.7 and 6.36 % peak error from the best of those, at
-25.9 and 1.98 % from a random start (300 rpm: 25.7 -> 24.4, 1.88 -> 0.40 %); bench 131
-at 200 rpm 26.0 -> 25.7, 1.83 -> 1.34 %; bench 111 at 300 rpm 3.81 -> 0.66 %, fresh
-benches 203 at 400 rpm 5.28 -> 1.32 % and 204 at 200 rpm 2.05 -> 1.22 %; no speed of 11
-benches worse by more than 0.05 points (session 22, ``scripts/bench_fidelity.py
---lubricant-random-starts 0`` against the default). Cost: ``reproduce data/pmsm40kw``
-34.7 -> 57.5 s idle (rotating mean 0.255 -> 0.244 %)."""
 
 LUBRICANT_RANDOM_SIGMA = 1.5
 """Spread (natural-log units) of the random lubricant starts."""
@@ -518,12 +484,14 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     weight_bearing : float
         Weight of condition 2 relative to condition 1 in the standstill stage.
     max_nfev : int
-        Evaluation limit of the impedance stages (each start).
+        Evaluation limit of the machine stages (each impedance start; the standstill stage
+        at most ``max_nfev_standstill``).
     max_nfev_lubricant : int, optional
         Evaluation limit of each start of a lubricant stage (default ``max_nfev``).
     lubricant_random_starts : int
         Random starts added to the physical ones of each lubricant stage
-        (:func:`_lubricant_starts`; ``reproduce`` uses :data:`LUBRICANT_RANDOM_STARTS`).
+        (:func:`_lubricant_starts`; ``reproduce`` uses
+        :data:`~vfmodel.greybox.effects.LUBRICANT_RANDOM_STARTS`).
     max_nfev_standstill : int
         Evaluation limit of the standstill stage (it starts at the impedance optimum; each
         evaluation with its Jacobian is the most expensive of the pipeline).

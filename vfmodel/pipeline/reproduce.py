@@ -53,10 +53,13 @@ from vfmodel.greybox.bearing import (
 )
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
-from vfmodel.greybox.effects import PAPER_EFFECTS, SECTIONS
-from vfmodel.greybox.identify import (
+from vfmodel.greybox.effects import (
     LUBRICANT_MAX_NFEV,
     LUBRICANT_RANDOM_STARTS,
+    PAPER_EFFECTS,
+    SECTIONS,
+)
+from vfmodel.greybox.identify import (
     STANDSTILL_HIDDEN,
     Identification,
     RotatingFit,
@@ -193,7 +196,7 @@ def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
 
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
-              max_nfev: int = 40, max_nfev_lubricant: int | None = LUBRICANT_MAX_NFEV,
+              max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,
               lubricant_random_starts: int = LUBRICANT_RANDOM_STARTS,
               progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
@@ -201,9 +204,9 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               priors: bool = False) -> ReproduceResult:
     """Run the paper's pipeline on ``dataset`` (see the module docstring).
     ``max_nfev``: evaluation limit of the machine stages; ``max_nfev_lubricant``: of each
-    start of a lubricant stage (None: ``max_nfev``; default
-    :data:`vfmodel.greybox.identify.LUBRICANT_MAX_NFEV`); ``lubricant_random_starts``: random
-    starts added to each lubricant stage's physical ones. ``priors``: the
+    start of a lubricant stage (:data:`~vfmodel.greybox.effects.LUBRICANT_MAX_NFEV`);
+    ``lubricant_random_starts``: random starts added to each lubricant stage's physical
+    ones (:data:`~vfmodel.greybox.effects.LUBRICANT_RANDOM_STARTS`). ``priors``: the
     identification is maximum a posteriori with the physical priors
     (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
     if not dataset.impedance:
