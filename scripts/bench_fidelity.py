@@ -38,7 +38,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vfmodel.greybox.effects import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
+from vfmodel.greybox.effects import JOINT_REFIT, LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
 
 GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.0,
          "coherence": 0.995, "coverage": 0.90}
@@ -47,7 +47,8 @@ GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.
 def _run(path: str, seed: int | None, rotating_fit: str = "record",
          standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
          max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,
-         random_starts: int = LUBRICANT_RANDOM_STARTS) -> dict[str, Any]:
+         random_starts: int = LUBRICANT_RANDOM_STARTS,
+         joint: bool = JOINT_REFIT) -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
@@ -60,7 +61,7 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit,  # type: ignore[arg-type]
                     max_nfev=max_nfev, max_nfev_lubricant=max_nfev_lubricant,
-                    lubricant_random_starts=random_starts).results
+                    lubricant_random_starts=random_starts, joint=joint).results
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -293,6 +294,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--lubricant-random-starts", type=int, default=LUBRICANT_RANDOM_STARTS,
                     help="random starts added to each lubricant stage (reproduce's "
                          "--lubricant-random-starts)")
+    ap.add_argument("--joint", action=argparse.BooleanOptionalAction, default=JOINT_REFIT,
+                    help="joint refit of the rotor-side machine with every rotating record "
+                         "(reproduce's default: %(default)s)")
     ap.add_argument("--random-start", action="store_true",
                     help="benches whose records start at a random point of a PWM period "
                          "(written as bench<seed>rs)")
@@ -321,7 +325,8 @@ def main(argv: list[str] | None = None) -> int:
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra,
-                          a.max_nfev, a.max_nfev_lubricant, a.lubricant_random_starts): k
+                          a.max_nfev, a.max_nfev_lubricant, a.lubricant_random_starts,
+                          a.joint): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()

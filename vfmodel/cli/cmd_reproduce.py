@@ -7,7 +7,12 @@ from pathlib import Path
 import click
 
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
-from vfmodel.greybox.effects import LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS, SECTIONS
+from vfmodel.greybox.effects import (
+    JOINT_REFIT,
+    LUBRICANT_MAX_NFEV,
+    LUBRICANT_RANDOM_STARTS,
+    SECTIONS,
+)
 
 REPRODUCE_OUTPUTS = ("results.json", "report.html", "network_*rpm.cir", "fig*.png",
                      "blackbox_errors.png", "poles.png")
@@ -39,6 +44,10 @@ def _sections(value: str) -> tuple[int, ...]:
               show_default=True, type=click.IntRange(0, 50),
               help="Random starts added to the three physical starts of each lubricant "
                    "stage.")
+@click.option("--joint/--no-joint", default=JOINT_REFIT, show_default=True,
+              help="Refit the rotor-side capacitances and the rotor-current path with "
+                   "every rotating record (kept only where the impedance spectra stay "
+                   "within 1.1x their misfit).")
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")
@@ -48,7 +57,7 @@ def _sections(value: str) -> tuple[int, ...]:
 @out_option
 @quiet_option
 def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
-              max_nfev_lubricant: int, lubricant_random_starts: int,
+              max_nfev_lubricant: int, lubricant_random_starts: int, joint: bool,
               priors: bool,
               add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
     """Identify the grey-box model of DATASET (impedance spectra, then the H1 transfer of the
@@ -70,7 +79,7 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
         res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
                   max_nfev=max_nfev, progress=prog, priors=priors,
                   max_nfev_lubricant=max_nfev_lubricant,
-                  lubricant_random_starts=lubricant_random_starts)
+                  lubricant_random_starts=lubricant_random_starts, joint=joint)
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

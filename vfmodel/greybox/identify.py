@@ -201,6 +201,8 @@ class Identification:
 
     ``params``: machine parameters (standstill); ``speeds``: one :class:`SpeedFit` per
     recording (sorted by speed); ``impedance``: the condition-1 term (measured spectra).
+    ``stagewise``: when a joint stage was kept, the parameters before it, by speed (the
+    rotating speeds) and under ``None`` (the machine); empty otherwise.
     """
 
     params: ParamSet
@@ -209,6 +211,7 @@ class Identification:
     speeds: tuple[SpeedFit, ...]
     stages: tuple[StageReport, ...]
     machine_rel_std: dict[str, float]
+    stagewise: dict[float | None, ParamSet] = field(default_factory=dict)
 
 
 def bearing_state(speed_rpm: float, effects: Iterable[str]) -> BearingState:
@@ -460,7 +463,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              input_noise: bool = True,
              hold_standstill: Sequence[str] = STANDSTILL_HIDDEN,
              rotating_fit: RotatingFit = "record", joint: bool = False,
-             max_nfev_joint: int = 25,
+             max_nfev_joint: int = 25, joint_trigger: float = JOINT_TRIGGER,
              standstill_fit: StandstillFit = "combined",
              priors: bool = False) -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
@@ -526,7 +529,11 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         in 5 of 20 cases (15 of 20 without it) and the C_wr interval in 1 of 4 (3 of 4
         without), while the
         peak errors stayed alike: mean 1.89 vs 2.08 %, worst 11.4 vs 10.8 %; its 15-25 s
-        are then saved).
+        are then saved). ``reproduce`` runs it (with ``joint_trigger=0``) and widens its
+        intervals by the shift of each quantity between the two fits (``stagewise``).
+    joint_trigger : float
+        The joint stage runs only when a lubricant stage ended with at least this reduced
+        chi-square (:func:`joint_stage`); 0: always.
     priors : bool
         Maximum a posteriori: every stage's parameters with their physical priors
         (:func:`vfmodel.greybox.priors.parameter_priors` of the dataset: the machine
@@ -661,6 +668,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         fits.append(SpeedFit(s, "rotating", fit_p, bterm, rep, rterm))
         cur = fit_p
     rot = [f for f in fits if f.record is not None]
+    stagewise: dict[float | None, ParamSet] = {}
     if joint and rot:
         # shared rotor-side capacitances refitted with every record (greybox.joint)
         machine: list[tuple[str, Term, float]] = []
@@ -668,8 +676,9 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
             machine.append(("impedance", imp_fit, 1.0))
         machine += [("standstill", t, w) for t, w in terms0]
         res = joint_stage(p, fits, stages, machine, lub, max_nfev=max_nfev_joint,
-                          prior_sigma=prior_sigma, progress=progress)
+                          prior_sigma=prior_sigma, progress=progress, trigger=joint_trigger)
         if res is not None:
+            stagewise = {None: p, **{f.speed_rpm: f.params for f in rot}}
             p, fits, jrep = res
             stages.append(jrep)
             # the shared names the joint stage fitted (per-speed copies carry "@rpm")
@@ -677,7 +686,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     fits.sort(key=lambda f: f.speed_rpm)
     if imp is not None and stand:
         imp = impedance_term(dataset.impedance, spec, p)
-    return Identification(p, spec, imp, tuple(fits), tuple(stages), rel)
+    return Identification(p, spec, imp, tuple(fits), tuple(stages), rel, stagewise)
 
 
 def joint_stage(p: ParamSet, fits: Sequence[SpeedFit], stages: Sequence[StageReport],

@@ -26,7 +26,8 @@ from scipy.optimize import least_squares
 
 from vfmodel.greybox.params import ParamSet
 
-__all__ = ["LogCovariance", "LogFit", "fit_log", "log_covariance", "log_interval", "log_start"]
+__all__ = ["LogCovariance", "LogFit", "fit_log", "log_covariance", "log_interval", "log_start",
+           "widen_interval"]
 
 ArrF = NDArray[np.float64]
 
@@ -264,3 +265,26 @@ def log_interval(params: ParamSet, report: LogCovariance,
         return {"value": q0, "lo": None, "hi": None, "std_log": sd, **extra}
     return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
             "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd, **extra}
+
+
+def widen_interval(interval: dict[str, float | None], shift_log: float,
+                   level_z: float = 1.959964) -> dict[str, float | None]:
+    """``interval`` (:func:`log_interval`) with a structural shift: ``std_log`` combined in
+    quadrature with ``shift_log`` (the log of how far the quantity moved between two fits
+    of the same data that differ in what they hold fixed, e.g. the stage-wise and the joint
+    identification), ``lo``/``hi`` from it; the shift is written as ``refit_shift_log``. An
+    interval without bound stays without; an infinite shift (the quantity vanished in one
+    fit) leaves none (``refit_shift_log`` null)."""
+    if not np.isfinite(shift_log):
+        return {**interval, "lo": None, "hi": None, "std_log": None, "refit_shift_log": None}
+    out = {**interval, "refit_shift_log": float(shift_log)}
+    sd0, q0 = interval.get("std_log"), interval.get("value")
+    if sd0 is None or q0 is None or interval.get("lo") is None:
+        return out
+    sd = float(np.hypot(sd0, shift_log))
+    out["std_log"] = sd
+    if level_z * sd > _LOG_SPAN_MAX:
+        out.update(lo=None, hi=None)
+    else:
+        out.update(lo=q0 * float(np.exp(-level_z * sd)), hi=q0 * float(np.exp(level_z * sd)))
+    return out

@@ -54,6 +54,7 @@ from vfmodel.greybox.bearing import (
 from vfmodel.greybox.bearing import bvr as bvr_estimate
 from vfmodel.greybox.blackbox import BlackBoxComparison, compare_blackbox
 from vfmodel.greybox.effects import (
+    JOINT_REFIT,
     LUBRICANT_MAX_NFEV,
     LUBRICANT_RANDOM_STARTS,
     PAPER_EFFECTS,
@@ -67,7 +68,7 @@ from vfmodel.greybox.identify import (
     identify,
 )
 from vfmodel.greybox.joint import SHARED
-from vfmodel.greybox.lsq import log_interval
+from vfmodel.greybox.lsq import LogCovariance, log_interval, widen_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
     mape_pct,
@@ -188,6 +189,26 @@ def _f(x: float) -> float | None:
     return float(x) if np.isfinite(x) else None
 
 
+def _shifted(interval: dict[str, float | None], quantity: Callable[[ParamSet], float],
+             params: ParamSet, before: ParamSet | None) -> dict[str, float | None]:
+    """``interval`` of a joint fit's quantity widened by its shift from the stage-wise
+    fit ``before`` (:func:`vfmodel.greybox.lsq.widen_interval`); as it is without one."""
+    if before is None:
+        return interval
+    q0, q1 = float(quantity(params)), float(quantity(before))
+    shift = abs(float(np.log(q0 / q1))) if q0 > 0 and q1 > 0 else float("inf")
+    return widen_interval(interval, shift)
+
+
+def _speed_interval(params: ParamSet, report: LogCovariance,
+                    quantity: Callable[[ParamSet], float], *, before: ParamSet | None,
+                    **anchor: Any) -> dict[str, float | None]:
+    """:func:`log_interval` of one speed's quantity (``anchor``: its model-error
+    arguments), :func:`_shifted` from the stage-wise fit ``before``."""
+    return _shifted(log_interval(params, report, quantity, **anchor), quantity, params,
+                    before)
+
+
 def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
                        fs: float) -> dict[str, float | None]:
     pm, pk = peak_v(u_meas, fs, filtered=True), peak_v(u_model, fs, filtered=True)
@@ -198,6 +219,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,
               lubricant_random_starts: int = LUBRICANT_RANDOM_STARTS,
+              joint: bool = JOINT_REFIT,
               progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
               standstill_fit: StandstillFit = "combined",
@@ -206,7 +228,9 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     ``max_nfev``: evaluation limit of the machine stages; ``max_nfev_lubricant``: of each
     start of a lubricant stage (:data:`~vfmodel.greybox.effects.LUBRICANT_MAX_NFEV`);
     ``lubricant_random_starts``: random starts added to each lubricant stage's physical
-    ones (:data:`~vfmodel.greybox.effects.LUBRICANT_RANDOM_STARTS`). ``priors``: the
+    ones (:data:`~vfmodel.greybox.effects.LUBRICANT_RANDOM_STARTS`); ``joint``: the joint
+    refit of the rotor-side machine with every rotating record
+    (:data:`~vfmodel.greybox.effects.JOINT_REFIT`). ``priors``: the
     identification is maximum a posteriori with the physical priors
     (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
     if not dataset.impedance:
@@ -218,6 +242,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
                      max_nfev_lubricant=max_nfev_lubricant,
                      lubricant_random_starts=lubricant_random_starts, progress=progress,
+                     joint=joint, joint_trigger=0.0,
                      rotating_fit=rotating_fit, standstill_fit=standstill_fit, priors=priors)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
@@ -255,7 +280,9 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         for key in ("c_wr", "c_rf"):
             def cap(q: ParamSet, k: str = key) -> float:
                 return divider_capacitances(q, eff)[k]
-            divider_iv[f"{key}_f"] = log_interval(ident.params, mach[-1], cap)
+            divider_iv[f"{key}_f"] = _shifted(
+                log_interval(ident.params, mach[-1], cap), cap, ident.params,
+                ident.stagewise.get(None))
     speeds: list[SpeedResult] = []
     rel_rot, corr_all = [], []
     n_sp = len(ident.speeds)
@@ -306,8 +333,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             # machine is held there, and the standstill data do not see the plateau)
             disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
             cm = _remembered((sf.record or term).cm_transfer)
-            iv = partial(log_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
-                         anchor_report=sf.report)
+            iv = partial(_speed_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
+                         anchor_report=sf.report, before=ident.stagewise.get(sf.speed_rpm))
 
             entry["lubricant_interval"] = {
                 "r_ohm": iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
