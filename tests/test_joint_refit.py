@@ -26,8 +26,8 @@ Z95 = 1.959964
 def test_widened_interval_adds_the_shift_in_quadrature() -> None:
     # std_log 0.3 and a shift of 0.4 (the quantity moved by e^0.4 between the two fits):
     # std_log 0.5, bounds value * exp(-+1.96 * 0.5)
-    iv = {"value": 2.0, "lo": 2.0 * math.exp(-Z95 * 0.3), "hi": 2.0 * math.exp(Z95 * 0.3),
-          "std_log": 0.3}
+    iv: dict[str, float | None] = {"value": 2.0, "lo": 2.0 * math.exp(-Z95 * 0.3),
+                                   "hi": 2.0 * math.exp(Z95 * 0.3), "std_log": 0.3}
     out = widen_interval(iv, 0.4)
     assert out["std_log"] == pytest.approx(0.5, rel=1e-12)
     assert out["lo"] == pytest.approx(2.0 * math.exp(-Z95 * 0.5), rel=1e-12)
@@ -50,8 +50,8 @@ def test_shifted_interval_covers_both_fits() -> None:
     # interval of its own (std_log 0.01): the widened interval holds both values
     spec = [ParamSpec("a", 3.0, 1e-3, 1e3, "x")]
     joint, before = ParamSet.from_specs(spec), ParamSet.from_specs(spec).with_values({"a": 5.0})
-    iv = {"value": 3.0, "lo": 3.0 * math.exp(-Z95 * 0.01), "hi": 3.0 * math.exp(Z95 * 0.01),
-          "std_log": 0.01}
+    iv: dict[str, float | None] = {"value": 3.0, "lo": 3.0 * math.exp(-Z95 * 0.01),
+                                   "hi": 3.0 * math.exp(Z95 * 0.01), "std_log": 0.01}
     out = rp._shifted(iv, lambda q: q["a"], joint, before)
     assert out["refit_shift_log"] == pytest.approx(math.log(5 / 3), rel=1e-12)
     assert out["lo"] is not None and out["hi"] is not None
