@@ -47,7 +47,8 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--joint/--no-joint", default=JOINT_REFIT, show_default=True,
               help="Refit the rotor-side capacitances and the rotor-current path with "
                    "every rotating record (kept only where the impedance spectra stay "
-                   "within 1.1x their misfit).")
+                   "within 1.1x their misfit; its intervals widened by the shift from the "
+                   "stage-wise fit).")
 @click.option("--priors", is_flag=True, help="Maximum a posteriori identification with "
               "the physical priors of the grey-box parameters (dataset.toml [machine], "
               "[bearing], [priors]); model.rel_std in results.json is then posterior.")

@@ -529,7 +529,7 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         in 5 of 20 cases (15 of 20 without it) and the C_wr interval in 1 of 4 (3 of 4
         without), while the
         peak errors stayed alike: mean 1.89 vs 2.08 %, worst 11.4 vs 10.8 %; its 15-25 s
-        are then saved). ``reproduce`` runs it (with ``joint_trigger=0``) and widens its
+        are then saved). ``reproduce --joint`` runs it (with ``joint_trigger=0``) and widens its
         intervals by the shift of each quantity between the two fits (``stagewise``).
     joint_trigger : float
         The joint stage runs only when a lubricant stage ended with at least this reduced
