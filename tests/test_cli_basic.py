@@ -51,4 +51,3 @@ def test_info_json(tiny_dataset: Path, capsys: pytest.CaptureFixture[str]) -> No
     # the generator adds complex noise of relative std 0.5 % * sqrt(2) = 0.707 %
     for topo in ("U-Frame", "V-Frame", "U-V"):
         assert s["impedance"][topo]["noise_pct"] == pytest.approx(0.707, rel=0.2)
-

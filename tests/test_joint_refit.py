@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from benches.small_dataset import make_small_dataset
 from vfmodel.cli.main import main
@@ -45,30 +47,62 @@ def test_widened_interval_adds_the_shift_in_quadrature() -> None:
     json.dumps(gone, allow_nan=False)
 
 
-def test_shifted_interval_covers_both_fits() -> None:
-    # a quantity that is 3 in the joint fit and 5 in the stage-wise one, with a narrow
-    # interval of its own (std_log 0.01): the widened interval holds both values
+@dataclass(frozen=True)
+class _Report:
+    names: tuple[str, ...]
+    cov_log: NDArray[np.float64] | None
+
+
+def test_joint_interval_covers_both_fits() -> None:
+    # a quantity that is 3 in the joint fit (std_log 0.01 from its covariance) and 5 in the
+    # stage-wise one: the widened interval holds both values, std_log hypot(0.01, log 5/3)
     spec = [ParamSpec("a", 3.0, 1e-3, 1e3, "x")]
     joint, before = ParamSet.from_specs(spec), ParamSet.from_specs(spec).with_values({"a": 5.0})
-    iv: dict[str, float | None] = {"value": 3.0, "lo": 3.0 * math.exp(-Z95 * 0.01),
-                                   "hi": 3.0 * math.exp(Z95 * 0.01), "std_log": 0.01}
-    out = rp._shifted(iv, lambda q: q["a"], joint, before)
-    assert out["refit_shift_log"] == pytest.approx(math.log(5 / 3), rel=1e-12)
+    rep = _Report(("a",), np.array([[0.01**2]]))
+    out = rp._interval(joint, rep, lambda q: q["a"], before=before)
+    assert out["refit_shift_log"] == pytest.approx(math.log(5 / 3), rel=1e-9)
+    assert out["std_log"] == pytest.approx(math.hypot(0.01, math.log(5 / 3)), rel=1e-6)
     assert out["lo"] is not None and out["hi"] is not None
     assert out["lo"] < 3.0 < 5.0 < out["hi"]
-    # without a stage-wise fit (no joint stage kept) the interval is left as it is
-    assert rp._shifted(iv, lambda q: q["a"], joint, None) is iv
+    # without a stage-wise fit (no joint stage kept): log_interval's own interval
+    plain = rp._interval(joint, rep, lambda q: q["a"], before=None)
+    assert "refit_shift_log" not in plain
+    assert plain["std_log"] == pytest.approx(0.01, rel=1e-6)
 
 
 class _Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("flag", [None, "--no-joint", "--joint"])
-def test_joint_option_reaches_the_identification(flag: str | None, tmp_path: Path,
-                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+def test_library_joint_default_reaches_the_identification(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     ds = tmp_path / "ds"
     make_small_dataset(ds)
+    seen = _stopped_identify(monkeypatch)
+    with pytest.raises(_Stop):
+        rp.reproduce(read_dataset(ds), blackbox=False)
+    assert seen["joint"] is JOINT_REFIT and seen["joint_trigger"] == 0.0
+    with pytest.raises(_Stop):
+        rp.reproduce(read_dataset(ds), blackbox=False, joint=not JOINT_REFIT)
+    assert seen["joint"] is (not JOINT_REFIT)
+
+
+@pytest.mark.parametrize("flag", [None, "--no-joint", "--joint"])
+def test_cli_joint_option_reaches_the_identification(flag: str | None, tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    ds = tmp_path / "ds"
+    make_small_dataset(ds)
+    seen = _stopped_identify(monkeypatch)
+    # the stopped run is an internal error (exit 1) and writes nothing
+    args = ["reproduce", str(ds), "--out", str(tmp_path / "out"), "--quiet"]
+    assert main(args + ([flag] if flag else [])) == 1
+    assert seen["joint"] is (JOINT_REFIT if flag is None else flag == "--joint")
+    assert seen["joint_trigger"] == 0.0
+    assert not (tmp_path / "out" / "results.json").exists()
+
+
+def _stopped_identify(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
+    """Replace reproduce's identify by one that records its arguments and stops."""
     seen: dict[str, Any] = {}
 
     def fake_identify(*args: Any, **kw: Any) -> Any:
@@ -76,17 +110,4 @@ def test_joint_option_reaches_the_identification(flag: str | None, tmp_path: Pat
         raise _Stop
 
     monkeypatch.setattr(rp, "identify", fake_identify)
-    # the library: the default and an explicit False
-    with pytest.raises(_Stop):
-        rp.reproduce(read_dataset(ds), blackbox=False)
-    assert seen["joint"] is JOINT_REFIT and seen["joint_trigger"] == 0.0
-    with pytest.raises(_Stop):
-        rp.reproduce(read_dataset(ds), blackbox=False, joint=False)
-    assert seen["joint"] is False
-    # the CLI (the stopped run is an internal error, exit 1, and writes nothing)
-    seen.clear()
-    args = ["reproduce", str(ds), "--out", str(tmp_path / "out"), "--quiet"]
-    assert main(args + ([flag] if flag else [])) == 1
-    assert seen["joint"] is (JOINT_REFIT if flag is None else flag == "--joint")
-    assert not (tmp_path / "out" / "results.json").exists()
-    assert np.isfinite(seen["joint_trigger"])
+    return seen

@@ -276,7 +276,6 @@ peak, so the exported netlist's periodic response (``vfmodel predict``) moved fr
 2.1 % off the measured peak while the corrected one improved 0.83 -> 0.79 %."""
 
 
-
 EFFECT_LOCATIONS: dict[str, str] = {
     "winding_skin_effect": "winding",
     "insulation_dielectric_loss": "insulation",

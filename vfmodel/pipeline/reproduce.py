@@ -189,24 +189,19 @@ def _f(x: float) -> float | None:
     return float(x) if np.isfinite(x) else None
 
 
-def _shifted(interval: dict[str, float | None], quantity: Callable[[ParamSet], float],
-             params: ParamSet, before: ParamSet | None) -> dict[str, float | None]:
-    """``interval`` of a joint fit's quantity widened by its shift from the stage-wise
-    fit ``before`` (:func:`vfmodel.greybox.lsq.widen_interval`); as it is without one."""
+def _interval(params: ParamSet, report: LogCovariance,
+              quantity: Callable[[ParamSet], float], *, before: ParamSet | None,
+              **anchor: Any) -> dict[str, float | None]:
+    """:func:`log_interval` of ``quantity`` (``anchor``: its model-error arguments); after
+    a joint fit (``before``: the stage-wise parameters) widened by the quantity's shift
+    between the two fits (:func:`vfmodel.greybox.lsq.widen_interval`)."""
+    iv = log_interval(params, report, quantity, **anchor)
     if before is None:
-        return interval
-    q0, q1 = float(quantity(params)), float(quantity(before))
-    shift = abs(float(np.log(q0 / q1))) if q0 > 0 and q1 > 0 else float("inf")
-    return widen_interval(interval, shift)
-
-
-def _speed_interval(params: ParamSet, report: LogCovariance,
-                    quantity: Callable[[ParamSet], float], *, before: ParamSet | None,
-                    **anchor: Any) -> dict[str, float | None]:
-    """:func:`log_interval` of one speed's quantity (``anchor``: its model-error
-    arguments), :func:`_shifted` from the stage-wise fit ``before``."""
-    return _shifted(log_interval(params, report, quantity, **anchor), quantity, params,
-                    before)
+        return iv
+    q0, q1 = iv["value"], float(quantity(before))
+    shift = abs(float(np.log(q0 / q1))) if q0 is not None and q0 > 0 and q1 > 0 \
+        else float("inf")
+    return widen_interval(iv, shift)
 
 
 def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
@@ -280,9 +275,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
         for key in ("c_wr", "c_rf"):
             def cap(q: ParamSet, k: str = key) -> float:
                 return divider_capacitances(q, eff)[k]
-            divider_iv[f"{key}_f"] = _shifted(
-                log_interval(ident.params, mach[-1], cap), cap, ident.params,
-                ident.stagewise.get(None))
+            divider_iv[f"{key}_f"] = _interval(ident.params, mach[-1], cap,
+                                               before=ident.stagewise.get(None))
     speeds: list[SpeedResult] = []
     rel_rot, corr_all = [], []
     n_sp = len(ident.speeds)
@@ -333,7 +327,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
             # machine is held there, and the standstill data do not see the plateau)
             disc = plateau_discrepancy(prep.h1, term.op.mask, term.h_meas, h1_model)
             cm = _remembered((sf.record or term).cm_transfer)
-            iv = partial(_speed_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
+            iv = partial(_interval, sf.params, rep, anchor=cm, anchor_tau=disc.tau,
                          anchor_report=sf.report, before=ident.stagewise.get(sf.speed_rpm))
 
             entry["lubricant_interval"] = {
