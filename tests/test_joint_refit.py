@@ -111,3 +111,41 @@ def _stopped_identify(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
 
     monkeypatch.setattr(rp, "identify", fake_identify)
     return seen
+
+
+def test_identify_keeps_the_stagewise_values_of_a_kept_joint_fit(tmp_path: Path) -> None:
+    """When the joint stage is kept, ``Identification.stagewise`` holds the values before it:
+    the machine (key None) and each rotating speed's parameters, as the stage-wise fit left
+    them. The bench of tests/test_reproduce.py, on which the joint fit is kept (session 23).
+    The joint stage refits only the shared rotor-side values and the per-speed lubricant,
+    so every other machine value is the stage-wise one and at least one shared value moved.
+    """
+    from tests.conftest import load_script
+    from vfmodel.greybox.assembly import lubricant_names
+    from vfmodel.greybox.identify import identify
+    from vfmodel.greybox.joint import SHARED
+
+    ds = tmp_path / "bench"
+    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
+                                             n_freq=81, n_coils=2, n_rungs=4)
+    data = read_dataset(ds)
+    plain = identify(data, sections=(2,), max_nfev=12, joint=False)
+    ident = identify(data, sections=(2,), max_nfev=12, joint=True, joint_trigger=0.0)
+    assert plain.stagewise == {}
+    assert any(st.name.startswith("joint") for st in ident.stages), "joint fit not kept"
+    assert set(ident.stagewise) == {None, 200.0}
+    before = ident.stagewise[None]
+    # the values before the joint stage are the stage-wise fit's (same data, same code)
+    assert before.names == plain.params.names
+    np.testing.assert_allclose(before.values, plain.params.values, rtol=1e-6)
+    shared = [n for n in SHARED if n in before.names]
+    for n in before.names:
+        if n not in shared:
+            assert ident.params[n] == pytest.approx(before[n], rel=1e-12), n
+    assert max(abs(math.log(ident.params[n] / before[n])) for n in shared) > 1e-3
+    rot_plain = next(f for f in plain.speeds if f.speed_rpm == 200.0)
+    rot_joint = next(f for f in ident.speeds if f.speed_rpm == 200.0)
+    lub = lubricant_names(before)
+    np.testing.assert_allclose([ident.stagewise[200.0][n] for n in lub],
+                               [rot_plain.params[n] for n in lub], rtol=1e-6)
+    assert any(rot_joint.params[n] != ident.stagewise[200.0][n] for n in lub)
