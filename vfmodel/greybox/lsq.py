@@ -26,8 +26,8 @@ from scipy.optimize import least_squares
 
 from vfmodel.greybox.params import ParamSet
 
-__all__ = ["LogCovariance", "LogFit", "fit_log", "log_covariance", "log_interval", "log_start",
-           "widen_interval"]
+__all__ = ["Z95", "LogCovariance", "LogFit", "fit_log", "log_covariance", "log_interval",
+           "log_start", "widen_interval"]
 
 ArrF = NDArray[np.float64]
 
@@ -54,6 +54,7 @@ Jacobian reaches this (the solver's SVD then costs ~25 ms or more per step) and
 ``m >= 10 n``. Below it the SVD is cheap and the compressed steps, equal only to
 rounding, would merely perturb the path of fits that end at their evaluation limit."""
 _LOG_SPAN_MAX = 50.0  # an interval beyond e^50 (5e21x) either way states no bound
+Z95 = 1.959964  # two-sided 95 % quantile of the standard normal distribution
 
 
 def _last_value(g: Callable[[ArrF], ArrF]) -> Callable[[ArrF], ArrF]:
@@ -206,7 +207,7 @@ def _quadratic(a: ArrF, cov: ArrF, b: ArrF) -> float | None:
 
 def log_interval(params: ParamSet, report: LogCovariance,
                  quantity: Callable[[ParamSet], float],
-                 level_z: float = 1.959964, *,
+                 level_z: float = Z95, *,
                  anchor: Callable[[ParamSet], float] | None = None,
                  anchor_tau: float = 0.0,
                  anchor_report: LogCovariance | None = None) -> dict[str, float | None]:
@@ -261,14 +262,19 @@ def log_interval(params: ParamSet, report: LogCovariance,
         extra["model_error_log"] = abs(beta) * anchor_tau
         var += (beta * anchor_tau) ** 2
     sd = float(np.sqrt(var))
-    if level_z * sd > _LOG_SPAN_MAX:  # no bound the data give (exp would overflow)
-        return {"value": q0, "lo": None, "hi": None, "std_log": sd, **extra}
-    return {"value": q0, "lo": q0 * float(np.exp(-level_z * sd)),
-            "hi": q0 * float(np.exp(level_z * sd)), "std_log": sd, **extra}
+    return {"value": q0, **_bounds(q0, sd, level_z), "std_log": sd, **extra}
+
+
+def _bounds(q0: float, sd: float, level_z: float) -> dict[str, float | None]:
+    """``lo``/``hi`` of ``q0 exp(-+level_z sd)``; None beyond :data:`_LOG_SPAN_MAX` (no
+    bound the data give; exp would overflow)."""
+    if level_z * sd > _LOG_SPAN_MAX:
+        return {"lo": None, "hi": None}
+    return {"lo": q0 * float(np.exp(-level_z * sd)), "hi": q0 * float(np.exp(level_z * sd))}
 
 
 def widen_interval(interval: dict[str, float | None], shift_log: float,
-                   level_z: float = 1.959964) -> dict[str, float | None]:
+                   level_z: float = Z95) -> dict[str, float | None]:
     """``interval`` (:func:`log_interval`) with a structural shift: ``std_log`` combined in
     quadrature with ``shift_log`` (the log of how far the quantity moved between two fits
     of the same data that differ in what they hold fixed, e.g. the stage-wise and the joint
@@ -282,9 +288,4 @@ def widen_interval(interval: dict[str, float | None], shift_log: float,
     if sd0 is None or q0 is None or interval.get("lo") is None:
         return out
     sd = float(np.hypot(sd0, shift_log))
-    out["std_log"] = sd
-    if level_z * sd > _LOG_SPAN_MAX:
-        out.update(lo=None, hi=None)
-    else:
-        out.update(lo=q0 * float(np.exp(-level_z * sd)), hi=q0 * float(np.exp(level_z * sd)))
-    return out
+    return {**out, **_bounds(q0, sd, level_z), "std_log": sd}
