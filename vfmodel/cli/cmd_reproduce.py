@@ -34,6 +34,11 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--sections", default=",".join(map(str, SECTIONS)), show_default=True,
               help="Candidate winding sections per phase (2 = the paper's model); the "
                    "identification keeps the best the spectra support.")
+@click.option("--sections-by", type=click.Choice(["spectra", "records"]), default="spectra",
+              show_default=True,
+              help="Choose the winding-section count by the impedance spectra alone, or "
+                   "among the spectra's choice and its neighbours by the fit of the "
+                   "rotating records (an identification per count tried).")
 @click.option("--no-blackbox", is_flag=True, help="Skip the black-box comparison.")
 @click.option("--max-nfev", default=40, show_default=True, type=click.IntRange(5, 1000),
               help="Function evaluations per identification stage.")
@@ -57,7 +62,8 @@ def _sections(value: str) -> tuple[int, ...]:
                    "`vfmodel diagnose` found: endwinding_capacitance, fixture_inductance.")
 @out_option
 @quiet_option
-def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
+def reproduce(dataset: Path, sections: str, sections_by: str, no_blackbox: bool,
+              max_nfev: int,
               max_nfev_lubricant: int, lubricant_random_starts: int, joint: bool,
               priors: bool,
               add_effects: tuple[str, ...], out_dir: Path, quiet: bool) -> None:
@@ -80,7 +86,8 @@ def reproduce(dataset: Path, sections: str, no_blackbox: bool, max_nfev: int,
         res = run(ds, effects=sorted(effects), sections=secs, blackbox=not no_blackbox,
                   max_nfev=max_nfev, progress=prog, priors=priors,
                   max_nfev_lubricant=max_nfev_lubricant,
-                  lubricant_random_starts=lubricant_random_starts, joint=joint)
+                  lubricant_random_starts=lubricant_random_starts, joint=joint,
+                  sections_by=sections_by)  # type: ignore[arg-type]
         for name, text in res.netlists.items():
             atomic_write_text(stage.path(name), text)
         prog("figures", 0, 1)

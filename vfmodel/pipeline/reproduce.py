@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from vfmodel._choices import check_choice
 from vfmodel.circuit.spice_export import to_spice
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.progress import Progress, no_progress
@@ -84,6 +85,7 @@ from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.path_prior import with_path_prior
 from vfmodel.greybox.priors import parameter_priors
 from vfmodel.greybox.propagate import with_machine_uncertainty
+from vfmodel.greybox.section_choice import SectionsBy, identify_by_records
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
 
@@ -218,7 +220,8 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               progress: Progress = no_progress,
               rotating_fit: RotatingFit = "record",
               standstill_fit: StandstillFit = "combined",
-              priors: bool = False) -> ReproduceResult:
+              priors: bool = False,
+              sections_by: SectionsBy = "spectra") -> ReproduceResult:
     """Run the paper's pipeline on ``dataset`` (see the module docstring).
     ``max_nfev``: evaluation limit of the machine stages; ``max_nfev_lubricant``: of each
     start of a lubricant stage (:data:`~vfmodel.greybox.effects.LUBRICANT_MAX_NFEV`);
@@ -227,18 +230,28 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     refit of the rotor-side machine with every rotating record
     (:data:`~vfmodel.greybox.effects.JOINT_REFIT`). ``priors``: the
     identification is maximum a posteriori with the physical priors
-    (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior."""
+    (:func:`vfmodel.greybox.identify.identify`); ``model.rel_std`` is then posterior.
+    ``sections_by="records"``: the winding-section count is the one among the spectra's
+    choice and its neighbours whose rotating records fit best
+    (:func:`vfmodel.greybox.section_choice.identify_by_records`; an identification per
+    count tried); ``model.section_scores`` in results.json then holds each count's score."""
     if not dataset.impedance:
         raise InputError("reproduce needs impedance spectra", source=dataset.name,
                          expected="an [impedance] table in dataset.toml")
     if not dataset.recordings:
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
-    ident = identify(dataset, effects, sections=sections, max_nfev=max_nfev,
-                     max_nfev_lubricant=max_nfev_lubricant,
-                     lubricant_random_starts=lubricant_random_starts, progress=progress,
-                     joint=joint, joint_trigger=0.0,
-                     rotating_fit=rotating_fit, standstill_fit=standstill_fit, priors=priors)
+    check_choice("sections_by", sections_by, SectionsBy)
+    id_kw: dict[str, Any] = dict(
+        max_nfev=max_nfev, max_nfev_lubricant=max_nfev_lubricant,
+        lubricant_random_starts=lubricant_random_starts, progress=progress, joint=joint,
+        joint_trigger=0.0, rotating_fit=rotating_fit, standstill_fit=standstill_fit,
+        priors=priors)
+    scores: dict[int, float | None] | None = None
+    if sections_by == "records":
+        ident, scores = identify_by_records(dataset, effects, sections=sections, **id_kw)
+    else:
+        ident = identify(dataset, effects, sections=sections, **id_kw)
     eff = ident.spec.effects
     res: dict[str, Any] = {"dataset": dataset.name}
     # ---- impedance (Table II)
@@ -390,7 +403,11 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                     "n_residuals": s.n_residuals, "status": s.status} for s in ident.stages],
         "speeds": {rpm_key(s.speed_rpm): {"state": s.state, "params": s.params.as_dict()}
                    for s in ident.speeds},
+        "sections_by": sections_by,
     }
+    if scores is not None:  # mean ln chi2_red of the rotating records per count tried
+        res["model"]["section_scores"] = {str(n): None if v is None else _f(v)
+                                          for n, v in scores.items()}
     bb = None
     if blackbox:
         bb = compare_blackbox(ident, progress=progress)

@@ -285,6 +285,16 @@ def _film(r: dict[str, Any]) -> str:
             "to each quantity by its regression on log H_cm.</p>")
 
 
+def _section_scores(model: dict[str, Any]) -> str:
+    """The winding-section counts tried by ``--sections-by records`` and their scores."""
+    sc = model.get("section_scores")
+    if not sc:
+        return ""
+    got = ", ".join(f"{E(k)}: {'-' if v is None else f'{v:.3f}'}" for k, v in sc.items())
+    return ("<p>Section count chosen by the rotating records (mean ln χ²<sub>red</sub> of "
+            f"the rotating speeds' stages per count, lowest kept): {got}.</p>")
+
+
 def _bvr(r: dict[str, Any]) -> str:
     base = r.get("baseline_bvr", {})
     if not base:
@@ -351,6 +361,7 @@ def _identification(r: dict[str, Any]) -> str:
             f"<p>Winding sections: {E(str(model.get('n_sections')))}, ladder rungs: "
             f"{E(str(model.get('n_rungs')))}; effects: "
             f"{E(', '.join(model.get('effects', [])))}.</p>"
+            + _section_scores(model)
             + table(["stage", "reduced χ²", "evaluations", "residuals", "stopped by"], stages)
             + "<h3>Machine parameters (95 % intervals)</h3>"
             "<p class='note'>Interval: value × exp(±1.96 σ) with σ the standard deviation "
