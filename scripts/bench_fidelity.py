@@ -48,7 +48,7 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
          standstill_fit: str = "combined", extra_effects: tuple[str, ...] = (),
          max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,
          random_starts: int = LUBRICANT_RANDOM_STARTS,
-         joint: bool = JOINT_REFIT) -> dict[str, Any]:
+         joint: bool = JOINT_REFIT, sections_by: str = "spectra") -> dict[str, Any]:
     """Reproduce one dataset (the paper's network plus ``extra_effects``); returns its
     metrics and the truth comparison."""
     from vfmodel.core.io_dataset import read_dataset
@@ -61,7 +61,8 @@ def _run(path: str, seed: int | None, rotating_fit: str = "record",
                     rotating_fit=rotating_fit,  # type: ignore[arg-type]
                     standstill_fit=standstill_fit,  # type: ignore[arg-type]
                     max_nfev=max_nfev, max_nfev_lubricant=max_nfev_lubricant,
-                    lubricant_random_starts=random_starts, joint=joint).results
+                    lubricant_random_starts=random_starts, joint=joint,
+                    sections_by=sections_by).results  # type: ignore[arg-type]
     out: dict[str, Any] = {"path": path, "seed": seed, "seconds": time.perf_counter() - t0,
                            "results": res, "covers": {}}
     if seed is not None:
@@ -297,6 +298,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--joint", action=argparse.BooleanOptionalAction, default=JOINT_REFIT,
                     help="joint refit of the rotor-side machine with every rotating record "
                          "(reproduce's default: %(default)s)")
+    ap.add_argument("--sections-by", default="spectra", choices=["spectra", "records"],
+                    help="how the winding-section count is chosen (reproduce's "
+                         "--sections-by)")
     ap.add_argument("--random-start", action="store_true",
                     help="benches whose records start at a random point of a PWM period "
                          "(written as bench<seed>rs)")
@@ -326,7 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         futs = {ex.submit(_run, p, s, a.rotating_fit, a.standstill_fit, extra,
                           a.max_nfev, a.max_nfev_lubricant, a.lubricant_random_starts,
-                          a.joint): k
+                          a.joint, a.sections_by): k
                 for k, (p, s) in enumerate(jobs)}
         for fut in as_completed(futs):
             r = done[futs[fut]] = fut.result()
