@@ -9,12 +9,15 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
 import pytest
 
 from tests.conftest import load_script
 from vfmodel.cli.main import main
+from vfmodel.core.dataset import Dataset
 from vfmodel.core.io_dataset import read_dataset
 from vfmodel.errors import InputError
+from vfmodel.greybox.identify import identify
 from vfmodel.greybox.section_choice import (
     identify_by_records,
     neighbour_sections,
@@ -24,21 +27,44 @@ from vfmodel.pipeline.reproduce import reproduce
 
 
 def _fake(n: int, chi2: list[float], standstill: bool = True) -> Any:
-    """An Identification-like object: ``n`` sections, rotating stages of ``chi2``."""
-    speeds = [SimpleNamespace(speed_rpm=100.0 * (k + 1), state="rotating",
-                              report=SimpleNamespace(chi2_red=c), term=SimpleNamespace(prep=k))
+    """An Identification-like object: ``n`` sections, rotating speeds whose record terms
+    give whitened residuals of mean square ``chi2`` (four equal entries each). Their stage
+    reports say 0.5, as a kept joint stage's report would: the score must not read them."""
+    def record(c: float) -> Any:
+        return SimpleNamespace(residual=lambda p: (np.full(4, math.sqrt(c)), None))
+
+    speeds = [SimpleNamespace(speed_rpm=100.0 * (k + 1), state="rotating", params=None,
+                              report=SimpleNamespace(chi2_red=0.5), record=record(c),
+                              term=SimpleNamespace(prep=k))
               for k, c in enumerate(chi2)]
     if standstill:
         speeds.insert(0, SimpleNamespace(speed_rpm=0.0, state="standstill", report=None,
-                                         term=SimpleNamespace(prep="p0")))
+                                         record=None, term=SimpleNamespace(prep="p0")))
     return SimpleNamespace(spec=SimpleNamespace(n_sections=n), speeds=tuple(speeds))
 
 
-def test_record_score_is_the_mean_log_chi2_of_the_rotating_stages() -> None:
-    # ln e = 1, ln e^3 = 3 -> 2 (the standstill fit has no stage report and is not counted)
+def test_record_score_is_the_mean_log_misfit_of_the_rotating_records() -> None:
+    # ln e = 1, ln e^3 = 3 -> 2 (the standstill fit is not counted, the reports not read)
     assert record_score(_fake(4, [math.e, math.e**3])) == pytest.approx(2.0, rel=1e-12)
     assert record_score(_fake(4, [])) is None
     assert record_score(_fake(4, [2.0, float("nan")])) is None
+
+
+def test_record_score_of_a_real_identification_matches_its_lubricant_stage(
+        tmp_path: Path) -> None:
+    """Without a joint stage the score is the lubricant stage's reduced chi-square (which
+    divides by m - n and adds the prior's rows: within 1 %); with a kept joint stage the
+    speed's report is the joint fit's and differs, the score still measures the record."""
+    ds = tmp_path / "bench"
+    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
+                                             n_freq=81, n_coils=2, n_rungs=4)
+    data = read_dataset(ds)
+    plain = identify(data, sections=(2,), max_nfev=12)
+    rep = next(f.report for f in plain.speeds if f.state == "rotating")
+    assert rep is not None and rep.name.startswith("lubricant")
+    score = record_score(plain)
+    assert score is not None
+    assert math.exp(score) == pytest.approx(rep.chi2_red, rel=0.01)
 
 
 def test_neighbours_stay_within_the_candidates() -> None:
@@ -82,12 +108,11 @@ def test_without_rotating_records_the_spectra_choice_stands() -> None:
     assert got.spec.n_sections == 4 and scores == {4: None} and len(n_calls) == 1
 
 
-def test_reproduce_refuses_an_unknown_choice(tmp_path: Path) -> None:
-    ds = tmp_path / "bench"
-    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
-                                             n_freq=41, n_coils=2, n_rungs=4)
+def test_reproduce_refuses_an_unknown_choice() -> None:
+    # checked before the data: an empty dataset is not what is reported
     with pytest.raises(InputError, match="sections_by"):
-        reproduce(read_dataset(ds), sections_by="coils")  # type: ignore[arg-type]
+        reproduce(Dataset(name="empty", impedance={}),
+                  sections_by="coils")  # type: ignore[arg-type]
 
 
 def test_cli_records_choice_end_to_end(tmp_path: Path) -> None:

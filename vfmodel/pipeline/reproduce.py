@@ -235,13 +235,13 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
     choice and its neighbours whose rotating records fit best
     (:func:`vfmodel.greybox.section_choice.identify_by_records`; an identification per
     count tried); ``model.section_scores`` in results.json then holds each count's score."""
+    check_choice("sections_by", sections_by, SectionsBy)
     if not dataset.impedance:
         raise InputError("reproduce needs impedance spectra", source=dataset.name,
                          expected="an [impedance] table in dataset.toml")
     if not dataset.recordings:
         raise InputError("reproduce needs recordings", source=dataset.name,
                          expected="[[recording]] entries in dataset.toml")
-    check_choice("sections_by", sections_by, SectionsBy)
     id_kw: dict[str, Any] = dict(
         max_nfev=max_nfev, max_nfev_lubricant=max_nfev_lubricant,
         lubricant_random_starts=lubricant_random_starts, progress=progress, joint=joint,
