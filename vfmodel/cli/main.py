@@ -9,11 +9,11 @@ from __future__ import annotations
 import os
 import sys
 import traceback
-from typing import Any
 
 import click
 
 from vfmodel import __version__
+from vfmodel.core.blas import blas_threads, limited_blas
 from vfmodel.errors import InputError, VfmodelError
 
 _COMMANDS = {
@@ -57,19 +57,6 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
     click.echo(f"vfmodel: warning: {message}", err=True)
 
 
-BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
-            "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
-
-
-def blas_threads() -> int:
-    """BLAS threads the CLI uses: 1 (its dense work is small: more threads only contend),
-    or ``VFMODEL_BLAS_THREADS`` when set; whatever OPENBLAS_NUM_THREADS etc. say."""
-    try:
-        return max(1, int(os.environ.get("VFMODEL_BLAS_THREADS", "1")))
-    except ValueError:
-        return 1
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI and return its exit status (used by the console script).
 
@@ -84,30 +71,9 @@ def main(argv: list[str] | None = None) -> int:
 
     keep_large_blocks()
 
-    n = str(blas_threads())
-    saved = {k: os.environ.get(k) for k in BLAS_ENV}
-    os.environ.update(dict.fromkeys(BLAS_ENV, n))
-    try:
-        with warnings.catch_warnings(), _threadpool_limits(int(n)):
-            warnings.showwarning = _show_warning
-            return _main(argv)
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-
-
-def _threadpool_limits(n: int) -> Any:
-    """threadpoolctl's limit for BLAS libraries already loaded (none: a no-op context)."""
-    import contextlib
-
-    if "numpy" not in sys.modules:
-        return contextlib.nullcontext()
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=n, user_api="blas")
+    with warnings.catch_warnings(), limited_blas(blas_threads()):
+        warnings.showwarning = _show_warning
+        return _main(argv)
 
 
 def _main(argv: list[str] | None) -> int:

@@ -23,6 +23,7 @@ from types import TracebackType
 from typing import Any, Generic, TypeVar
 
 from vfmodel.core import parallel
+from vfmodel.core.blas import one_thread_here
 
 __all__ = ["JobPool", "balanced"]
 
@@ -36,6 +37,7 @@ T = TypeVar("T")
 
 def _serve(conn: Connection, fn: Callable[[int, Any], Any]) -> None:
     parallel._IN_WORKER = True          # a job's own parallel_map runs in sequence here
+    one_thread_here()                   # the workers fill the cores
     while True:
         try:
             msg = conn.recv()

@@ -5,12 +5,14 @@ The identification's work is many small LAPACK and SuperLU calls driven from Pyt
 threads do not overlap (the GIL; measured: two starts in threads took as long as in
 sequence). Forked processes inherit the compiled terms without pickling them; only the
 index goes out and the (small) fit result comes back, so the results are the same as in
-sequence, in the same order. Processes are used only where ``fork`` exists and the
-calling process runs no other thread (forking a process with threads can deadlock on a
-lock held by one of them); otherwise, and for one job, the calls run in sequence.
-``VFMODEL_WORKERS`` (default: the usable cores, at most the number of jobs) sets the
-number of processes; ``1`` turns the processes off. A job that calls ``parallel_map``
-itself runs those calls in sequence (the cores are taken by the outer jobs).
+sequence, in the same order. Each worker runs BLAS on one thread
+(:func:`vfmodel.core.blas.one_thread_here`: the workers fill the cores). Processes are
+used only where ``fork`` exists and the calling process runs no other thread (forking a
+process with threads can deadlock on a lock held by one of them); otherwise, and for one
+job, the calls run in sequence. ``VFMODEL_WORKERS`` (default: the usable cores, at most
+the number of jobs) sets the number of processes; ``1`` turns the processes off. A job
+that calls ``parallel_map`` itself runs those calls in sequence (the cores are taken by
+the outer jobs).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from typing import Any, TypeVar
 
+from vfmodel.core.blas import one_thread_here
 from vfmodel.core.progress import Progress, no_progress
 
 __all__ = ["parallel_calls", "parallel_map", "workers"]
@@ -90,7 +93,8 @@ def parallel_map(fn: Callable[[int, Progress], T], n: int, progress: Progress = 
         progress(lab, 0, total)
     _JOB = lambda k: fn(k, no_progress)      # noqa: E731  (read by the forked workers)
     try:
-        with frozen_heap(), ProcessPoolExecutor(nw, mp_context=mp.get_context("fork")) as ex:
+        with frozen_heap(), ProcessPoolExecutor(nw, mp_context=mp.get_context("fork"),
+                                                 initializer=one_thread_here) as ex:
             done = dict(zip(order, ex.map(_run, order), strict=True))
         out = [done[k] for k in range(n)]
     finally:

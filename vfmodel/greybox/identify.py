@@ -71,6 +71,7 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import BearingState, check_choice
 from vfmodel.circuit.lowrank import LowRankTransfer
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.job_pool import JobPool
@@ -450,6 +451,7 @@ def thin_spectra(spectra: dict[str, FrequencyData], max_points: int) -> dict[str
     return out
 
 
+@capped_blas
 def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              sections: Sequence[int] = SECTIONS, n_rungs: int = 3,
              start: ParamSet | None = None, n_starts: int = 1, seed: int = 0,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.diagnose import Diagnosis, diagnose, impedance_mape_pct, sentence
 from vfmodel.detective.fit import FitResult
@@ -254,6 +255,7 @@ def film_law_sentence(doc: dict[str, Any]) -> str:
             f"vs {c['free']['chi2_red']:.3f}).")
 
 
+@capped_blas
 def run_diagnose(dataset: str | Path, *, without: Iterable[str] = (),
                  model: str | Path | None = None, priors: bool = False,
                  film_law: bool = False, progress: Progress = no_progress,

@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 
 from vfmodel._choices import check_choice
 from vfmodel.circuit.spice_export import to_spice
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.dataset import Dataset
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.errors import InputError
@@ -212,6 +213,7 @@ def _whole_record_peaks(u_model: ArrF, u_meas: ArrF,
     return {"measured_v": pm, "model_v": pk, "rel_err_pct": _f(peak_errors(pk, pm)[1])}
 
 
+@capped_blas
 def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
               sections: Sequence[int] = SECTIONS, blackbox: bool = True,
               max_nfev: int = 40, max_nfev_lubricant: int = LUBRICANT_MAX_NFEV,

@@ -1,0 +1,85 @@
+"""BLAS threads: the same cap for the CLI, the library's pipelines and their workers.
+
+The grey-box identification and the detective are many small dense solves driven from
+Python, run side by side in forked workers (:mod:`vfmodel.core.parallel`,
+:mod:`vfmodel.core.job_pool`). More than one BLAS thread per process only contends for the
+cores, and the thread count changes the rounding of BLAS reductions, which a long
+least-squares identification can carry into a different end point. Measured on
+independent bench 111 (2 cores, ``reproduce(sections=(6,))`` called from Python): 184 s
+with numpy's default two OpenBLAS threads against 51 s with one, and rotating peak errors
+of 0.49-0.99 % against the CLI's 1.02-1.98 %: the library and the CLI disagreed. With the
+cap the library call takes the CLI's time and gives its numbers.
+
+:func:`blas_threads` is the count (1, or ``VFMODEL_BLAS_THREADS``); :func:`limited_blas`
+applies it to the BLAS libraries already loaded (threadpoolctl) and, through the
+environment, to those loaded later; :func:`capped_blas` wraps a public entry point in it;
+:func:`one_thread_here` is called by each forked worker.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import sys
+from collections.abc import Callable, Iterator
+from typing import Any, TypeVar
+
+__all__ = ["BLAS_ENV", "blas_threads", "capped_blas", "limited_blas", "one_thread_here"]
+
+BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+            "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def blas_threads() -> int:
+    """BLAS threads of vfmodel's work: 1, or ``VFMODEL_BLAS_THREADS`` when set (whatever
+    OPENBLAS_NUM_THREADS etc. say)."""
+    try:
+        return max(1, int(os.environ.get("VFMODEL_BLAS_THREADS", "1")))
+    except ValueError:
+        return 1
+
+
+@contextlib.contextmanager
+def limited_blas(n: int | None = None) -> Iterator[None]:
+    """Within the block BLAS runs on ``n`` threads (default :func:`blas_threads`): the
+    libraries loaded now through threadpoolctl, those loaded later through the environment;
+    both are restored at the end."""
+    k = str(blas_threads() if n is None else max(1, int(n)))
+    saved = {v: os.environ.get(v) for v in BLAS_ENV}
+    os.environ.update(dict.fromkeys(BLAS_ENV, k))
+    try:
+        if "numpy" in sys.modules:
+            from threadpoolctl import threadpool_limits
+
+            with threadpool_limits(limits=int(k), user_api="blas"):
+                yield
+        else:
+            yield
+    finally:
+        for v, old in saved.items():
+            if old is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = old
+
+
+def capped_blas(fn: F) -> F:
+    """``fn`` run within :func:`limited_blas` (a public entry point of a pipeline)."""
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with limited_blas():
+            return fn(*args, **kwargs)
+    return wrapper  # type: ignore[return-value]
+
+
+def one_thread_here() -> None:
+    """One BLAS thread for the rest of this process (a forked worker: the workers fill the
+    cores)."""
+    os.environ.update(dict.fromkeys(BLAS_ENV, "1"))
+    if "numpy" in sys.modules:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=1, user_api="blas")
