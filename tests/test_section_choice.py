@@ -40,7 +40,8 @@ def _fake(n: int, chi2: list[float], standstill: bool = True) -> Any:
     if standstill:
         speeds.insert(0, SimpleNamespace(speed_rpm=0.0, state="standstill", report=None,
                                          record=None, term=SimpleNamespace(prep="p0")))
-    return SimpleNamespace(spec=SimpleNamespace(n_sections=n), speeds=tuple(speeds))
+    return SimpleNamespace(spec=SimpleNamespace(n_sections=n), speeds=tuple(speeds),
+                           impedance_fits={n: "fit"})
 
 
 def test_record_score_is_the_mean_log_misfit_of_the_rotating_records() -> None:
@@ -94,6 +95,28 @@ def test_the_count_with_the_best_record_fit_is_kept() -> None:
     assert all(c[1]["max_nfev"] == 7 for c in calls)
     assert "prepared" not in calls[0][1]
     assert calls[1][1]["prepared"] == {0.0: "p0", 100.0: 0, 200.0: 1}
+    assert calls[1][1]["impedance_fits"] == {4: "fit"}  # the first run's impedance stages
+
+
+def test_reused_impedance_fits_give_the_same_identification(tmp_path: Path) -> None:
+    """A count whose impedance stage was fitted before (``impedance_fits``) is not fitted
+    again and the identification is the one fitting it anew gives (the stages are
+    independent of each other); the first run returns every count it fitted."""
+    ds = tmp_path / "bench"
+    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
+                                             n_freq=81, n_coils=2, n_rungs=4)
+    data = read_dataset(ds)
+    first = identify(data, sections=(2, 3), max_nfev=6, max_nfev_lubricant=4)
+    assert sorted(first.impedance_fits) == [2, 3]
+    other = 5 - first.spec.n_sections
+    anew = identify(data, sections=(other,), max_nfev=6, max_nfev_lubricant=4)
+    reused = identify(data, sections=(other,), max_nfev=6, max_nfev_lubricant=4,
+                      impedance_fits=first.impedance_fits)
+    assert reused.stages[0].nfev == anew.stages[0].nfev
+    for name in anew.params.names:
+        assert reused.params[name] == pytest.approx(anew.params[name], rel=1e-9), name
+    imp = [s for s in reused.stages if s.name.startswith("impedance")]
+    assert imp[0] is first.impedance_fits[other][1]  # taken, not fitted again
 
 
 def test_without_rotating_records_the_spectra_choice_stands() -> None:

@@ -204,6 +204,8 @@ class Identification:
     recording (sorted by speed); ``impedance``: the condition-1 term (measured spectra).
     ``stagewise``: when a joint stage was kept, the parameters before it, by speed (the
     rotating speeds) and under ``None`` (the machine); empty otherwise.
+    ``impedance_fits``: the impedance stage of every section count fitted, by count
+    (what ``identify(impedance_fits=)`` takes again).
     """
 
     params: ParamSet
@@ -213,6 +215,7 @@ class Identification:
     stages: tuple[StageReport, ...]
     machine_rel_std: dict[str, float]
     stagewise: dict[float | None, ParamSet] = field(default_factory=dict)
+    impedance_fits: dict[int, tuple[ParamSet, StageReport]] = field(default_factory=dict)
 
 
 def bearing_state(speed_rpm: float, effects: Iterable[str]) -> BearingState:
@@ -467,7 +470,9 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
              rotating_fit: RotatingFit = "record", joint: bool = False,
              max_nfev_joint: int = 25, joint_trigger: float = JOINT_TRIGGER,
              standstill_fit: StandstillFit = "combined",
-             priors: bool = False) -> Identification:
+             priors: bool = False,
+             impedance_fits: Mapping[int, tuple[ParamSet, StageReport]] | None = None,
+             ) -> Identification:
     """Identify the grey-box network from a dataset (see the module docstring).
 
     Parameters
@@ -542,6 +547,11 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         stages at standstill, each lubricant stage at its speed) instead of the weak prior
         towards the start; the stages' ``rel_std`` are then posterior. The joint stage
         keeps the weak prior.
+    impedance_fits : mapping, optional
+        Impedance stages already fitted, by section count (``Identification.
+        impedance_fits`` of an identification of the same dataset with the same
+        effects, start and stage settings): those counts are not fitted again
+        (:func:`vfmodel.greybox.section_choice.identify_by_records`).
     """
     eff = check_effects(effects)
     pri0 = parameter_priors(dataset, 0.0) if priors else None
@@ -563,6 +573,10 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     # 21 independent benches: worst speed 10.5 -> 7.6 %, BVR beaten 123 -> 126 of 126
     # speeds (scripts/bench_fidelity.py)
     held = set(hold_standstill) if "metallic_contact" in eff else set()
+    # impedance stage by candidate index
+    fitted: dict[int, tuple[NetSpec, ParamSet, StageReport]] = {
+        k: (NetSpec(eff, n_rungs, n), *impedance_fits[n])
+        for k, n in enumerate(cands) if impedance_fits and n in impedance_fits}
     if dataset.impedance:
         thin = thin_spectra(dataset.impedance, fit_points)
         best: tuple[float, NetSpec, ParamSet, StageReport] | None = None
@@ -584,12 +598,14 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
         # still gained; each fit is independent of the others, so the choice is the same
         # as fitting them one at a time)
         def batch(ks: Sequence[int]) -> None:
+            ks = [k for k in ks if k not in fitted]
+            if not ks:
+                return
             got = parallel_map(lambda j, prog: fit_sections(ks[j], prog), len(ks), progress,
                                [f"impedance, {cands[k]} sections" for k in ks], max_nfev,
                                first=[len(ks) - 1])
             fitted.update(zip(ks, got, strict=True))
 
-        fitted: dict[int, tuple[NetSpec, ParamSet, StageReport]] = {}
         batch(range(min(3, len(cands))))
         for k in range(len(cands)):
             if k not in fitted:
@@ -688,7 +704,8 @@ def identify(dataset: Dataset, effects: Iterable[str] = PAPER_EFFECTS, *,
     fits.sort(key=lambda f: f.speed_rpm)
     if imp is not None and stand:
         imp = impedance_term(dataset.impedance, spec, p)
-    return Identification(p, spec, imp, tuple(fits), tuple(stages), rel, stagewise)
+    return Identification(p, spec, imp, tuple(fits), tuple(stages), rel, stagewise,
+                          {sp.n_sections: (pn, rp) for sp, pn, rp in fitted.values()})
 
 
 def joint_stage(p: ParamSet, fits: Sequence[SpeedFit], stages: Sequence[StageReport],

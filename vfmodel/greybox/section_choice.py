@@ -83,7 +83,8 @@ def identify_by_records(
     prepared = {f.speed_rpm: f.term.prep for f in first.speeds}
     best, best_score = first, scores[first.spec.n_sections]
     for n in neighbour_sections(first.spec.n_sections, sections):
-        got = run(dataset, eff, sections=(n,), **{**kw, "prepared": prepared})
+        got = run(dataset, eff, sections=(n,), **{**kw, "prepared": prepared,
+                                                   "impedance_fits": first.impedance_fits})
         scores[n] = s = record_score(got)
         if s is not None and best_score is not None and s < best_score:
             best, best_score = got, s
