@@ -15,8 +15,11 @@ whose rotating records are fitted best (:func:`record_score`: the mean over the 
 speeds of ``ln`` of the final model's reduced record misfit; the same records, noise model
 and weights for every count, so the scores compare). Measured in session 25 on the 17
 independent benches of session 24 (docs/notes.md): mean rotating peak error 1.10 -> 0.88 %,
-worst speed 6.52 -> 4.70 %, better on eight benches, worse on three (201, 210, 211). It
-costs an identification per neighbour, which is why it is not the default.
+worst speed 6.52 -> 4.70 %, better on eight benches, worse on three (201, 210, 211). On six
+fresh benches (session 26, seeds 220-225): 1.08 -> 1.10 %, better on one, worse on two, and
+one standstill correlation 0.9326 (the score counts only the rotating records). With that
+and an identification per neighbour (the impedance stages are reused), it is not the
+default.
 """
 
 from __future__ import annotations
