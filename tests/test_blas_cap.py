@@ -39,8 +39,27 @@ def test_pipelines_are_capped() -> None:
     code = ("from vfmodel.greybox.identify import identify; "
             "from vfmodel.pipeline.reproduce import reproduce; "
             "from vfmodel.pipeline.diagnose import run_diagnose; "
-            "print(*(hasattr(f, '__wrapped__') for f in (identify, reproduce, run_diagnose)))")
-    assert _run(code) == ["True", "True", "True"]
+            "from vfmodel.pipeline.fit_job import run_fit; "
+            "from vfmodel.fitting import vector_fit, check_passivity, enforce_passivity; "
+            "print(*(hasattr(f, '__wrapped__') for f in (identify, reproduce, run_diagnose, "
+            "run_fit, vector_fit, check_passivity, enforce_passivity)))")
+    assert _run(code) == ["True"] * 7
+
+
+def test_a_fit_runs_on_one_thread_and_warns_at_the_callers_line() -> None:
+    """The fit sees one thread; its warnings name the caller's line, not the wrapper's."""
+    code = ("import warnings; import vfmodel.fitting._relocate as r; seen = []; "
+            "orig = r.iterate; "
+            "r.iterate = lambda *a, **k: (seen.append(n()), orig(*a, **k))[1]; "
+            "from vfmodel.fitting import vector_fit; "
+            "from vfmodel.core.frequency_data import FrequencyData; "
+            "f = numpy.linspace(1e6, 1e9, 50); "
+            "fd = FrequencyData(f, (1 / (1 + 1j * f / 3e8))[:, None, None], kind='S'); "
+            "w = warnings.catch_warnings(record=True); got = w.__enter__(); "
+            "warnings.simplefilter('always'); "
+            "vector_fit(fd, order=1, max_iterations=1); w.__exit__(None, None, None); "
+            "print(set(seen), n() == n0, got[0].filename, got[0].lineno)")
+    assert _run(code) == ["{1}", "True", "<string>", "1"]
 
 
 def test_workers_use_one_thread() -> None:

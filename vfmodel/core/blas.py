@@ -11,8 +11,9 @@ of 0.49-0.99 % against the CLI's 1.02-1.98 %: the library and the CLI disagreed.
 cap the library call takes the CLI's time and gives its numbers.
 
 :func:`blas_threads` is the count (1, or ``VFMODEL_BLAS_THREADS``); :func:`limited_blas`
-applies it to the BLAS libraries already loaded (threadpoolctl) and, through the
-environment, to those loaded later; :func:`capped_blas` wraps a public entry point in it;
+applies it to the BLAS libraries already loaded (threadpoolctl, 10 us per call: small fits
+of a few milliseconds are wrapped too) and, through the environment, to those loaded
+later; :func:`capped_blas` wraps a public entry point in it;
 :func:`one_thread_here` is called by each forked worker.
 """
 
@@ -52,9 +53,7 @@ def limited_blas(n: int | None = None) -> Iterator[None]:
     os.environ.update(dict.fromkeys(BLAS_ENV, k))
     try:
         if "numpy" in sys.modules:
-            from threadpoolctl import threadpool_limits
-
-            with threadpool_limits(limits=int(k), user_api="blas"):
+            with _controller().limit(limits=int(k), user_api="blas"):
                 yield
         else:
             yield
@@ -64,6 +63,20 @@ def limited_blas(n: int | None = None) -> Iterator[None]:
                 os.environ.pop(v, None)
             else:
                 os.environ[v] = old
+
+
+_CONTROLLER: list[Any] = []  # [threadpoolctl controller, len(sys.modules) when made]
+
+
+def _controller() -> Any:
+    """threadpoolctl's view of the BLAS libraries loaded (7 ms to make, 10 us per limit
+    after): made again when modules were imported since (a library loaded since, e.g.
+    scipy's OpenBLAS beside numpy's, is then seen)."""
+    if not _CONTROLLER or _CONTROLLER[1] != len(sys.modules):
+        from threadpoolctl import ThreadpoolController
+
+        _CONTROLLER[:] = [ThreadpoolController(), len(sys.modules)]
+    return _CONTROLLER[0]
 
 
 def capped_blas(fn: F) -> F:

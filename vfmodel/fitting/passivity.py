@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize_scalar
 
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
@@ -302,6 +303,7 @@ def _worst(
 
 
 # ---------------------------------------------------------------------- public API
+@capped_blas
 def check_passivity(
     model: RationalModel,
     *,
@@ -359,7 +361,7 @@ def check_passivity(
                 f"Hamiltonian passivity test failed ({err}); fell back to dense sampling, "
                 "which cannot certify passivity between samples",
                 PassivityWarning,
-                stacklevel=2,
+                stacklevel=3,  # the caller's line (capped_blas adds a frame)
             )
             used = "sampling"
     else:
@@ -418,6 +420,7 @@ def check_passivity(
     )
 
 
+@capped_blas
 def enforce_passivity(
     model: RationalModel,
     data: FrequencyData | skrf.Network | str | os.PathLike[str] | None = None,

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vfmodel._choices import DcMode, Kind, PoleSpacing, Weighting, check_choice
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError
@@ -49,6 +50,7 @@ _DELAY_ORDER = 0.9  # delay="auto": the delay is kept only when it cuts the orde
 
 
 # ---------------------------------------------------------------------- main entry
+@capped_blas
 def vector_fit(
     data: FrequencyData | skrf.Network | str | os.PathLike[str],
     order: int | Literal["auto"] = "auto",
@@ -206,7 +208,7 @@ def vector_fit(
         cuts = with_delay[0].n_poles <= _DELAY_ORDER * without[0].n_poles
         pick = with_delay if e1 <= _DELAY_PAYS * floor and cuts else without
         for note in pick[1].notes:
-            warnings.warn(note, FitWarning, stacklevel=2)
+            warnings.warn(note, FitWarning, stacklevel=3)
         return pick
     if tau > 0:  # fit the response advanced by the delay; the model carries it
         data_fd = fd
@@ -299,14 +301,14 @@ def vector_fit(
     if order == "auto":
         report = _far_from_floor(report, fd, limit=cap, hit_max=hit_max)
     for note in report.notes:
-        warnings.warn(note, FitWarning, stacklevel=2)
+        warnings.warn(note, FitWarning, stacklevel=3)
     if not converged:
         warnings.warn(
             f"vector fitting did not converge in {max_iterations} iterations per order "
             f"(relative RMS error {report.rel_rms_error:.3g}); raise max_iterations or "
             "change the order",
             FitWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
     return model, report
 

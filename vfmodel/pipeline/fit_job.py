@@ -22,6 +22,7 @@ from typing import Any, Literal
 import numpy as np
 
 from vfmodel._choices import DcMode, Kind, Weighting
+from vfmodel.core.blas import capped_blas
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
@@ -86,6 +87,7 @@ def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> Frequenc
                          source=", ".join(s.source or "?" for s in conv))
 
 
+@capped_blas
 def run_fit(
     spectra: list[FrequencyData],
     *,
@@ -120,7 +122,7 @@ def run_fit(
             warnings.warn(
                 f"{data.source or 'spectrum'}: {art.describe()}; left out of the fit",
                 FitWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
             k = art.n_genuine
             data = FrequencyData(data.freq_hz[:k], data.values[:k], kind=data.kind,
