@@ -11,10 +11,10 @@ of 0.49-0.99 % against the CLI's 1.02-1.98 %: the library and the CLI disagreed.
 cap the library call takes the CLI's time and gives its numbers.
 
 :func:`blas_threads` is the count (1, or ``VFMODEL_BLAS_THREADS``); :func:`limited_blas`
-applies it to the BLAS libraries already loaded (threadpoolctl, 10 us per call: small fits
-of a few milliseconds are wrapped too) and, through the environment, to those loaded
-later; :func:`capped_blas` wraps a public entry point in it;
-:func:`one_thread_here` is called by each forked worker.
+applies it to the BLAS libraries already loaded (threadpoolctl; 4 us per call when nothing
+is to change, about 20 us otherwise: small fits of a few milliseconds are wrapped too) and,
+through the environment, to those loaded later; :func:`capped_blas` wraps a public entry
+point in it; :func:`one_thread_here` is called by each forked worker.
 """
 
 from __future__ import annotations
