@@ -34,10 +34,11 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from vfmodel._choices import SectionsBy
 from vfmodel.greybox.effects import JOINT_REFIT, LUBRICANT_MAX_NFEV, LUBRICANT_RANDOM_STARTS
 
 GOALS = {"rot_mean": 5.0, "rot_max": 8.0, "abs0": 0.08, "corr": 0.95, "mape": 3.0,
@@ -306,7 +307,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--joint", action=argparse.BooleanOptionalAction, default=JOINT_REFIT,
                     help="joint refit of the rotor-side machine with every rotating record "
                          "(reproduce's default: %(default)s)")
-    ap.add_argument("--sections-by", default="spectra", choices=["spectra", "records"],
+    ap.add_argument("--sections-by", default="spectra", choices=get_args(SectionsBy),
                     help="how the winding-section count is chosen (reproduce's "
                          "--sections-by)")
     ap.add_argument("--random-start", action="store_true",

@@ -30,9 +30,24 @@ def test_entry_points_run_on_one_thread_and_restore() -> None:
 
 
 def test_override_by_environment() -> None:
+    # OpenBLAS runs on at most the cores: two where the caller had two or more
     code = ("os.environ['VFMODEL_BLAS_THREADS'] = '2'; from vfmodel.core.blas import "
-            "limited_blas; \nwith limited_blas(): print(n())")
-    assert _run(code) == ["2"]
+            "limited_blas; \nwith limited_blas(): print(n() == min(2, n0))")
+    assert _run(code) == ["True"]
+
+
+def test_restored_after_an_error_and_nested_blocks() -> None:
+    """An exception inside a capped call restores the caller's count and environment; a
+    nested block of the same count changes nothing and leaves the outer one in force."""
+    code = ("from vfmodel.core.blas import capped_blas, limited_blas; "
+            "f = capped_blas(lambda: 1 / 0); \n"
+            "try: f()\nexcept ZeroDivisionError: pass\n"
+            "print(n() == n0, os.environ['OPENBLAS_NUM_THREADS']); \n"
+            "with limited_blas():\n"
+            "    with limited_blas(): inner = n()\n"
+            "    print(inner, n())\n"
+            "print(n() == n0)")
+    assert _run(code) == ["True", "4", "1", "1", "True"]
 
 
 def test_pipelines_are_capped() -> None:

@@ -51,6 +51,11 @@ Effect = Literal[
 BearingState = Literal["standstill", "rotating"]
 """Bearing lubrication state of the grey-box network: metallic contact closed or open."""
 
+SectionsBy = Literal["spectra", "records"]
+"""How ``reproduce`` chooses the winding-section count: by the impedance spectra alone or
+by the rotating records among the spectra's choice and its neighbours
+(:mod:`vfmodel.greybox.section_choice`)."""
+
 KINDS: tuple[str, ...] = get_args(Kind)
 TOPOLOGIES: tuple[str, ...] = get_args(Topology)
 """The six paper topologies (what ``Dataset.impedance`` holds and the pipeline iterates)."""

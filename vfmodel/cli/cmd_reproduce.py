@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import get_args
 
 import click
 
+from vfmodel._choices import SectionsBy
 from vfmodel.cli._common import out_option, progress_bar, quiet_option, write_json
 from vfmodel.greybox.effects import (
     JOINT_REFIT,
@@ -34,7 +36,7 @@ def _sections(value: str) -> tuple[int, ...]:
 @click.option("--sections", default=",".join(map(str, SECTIONS)), show_default=True,
               help="Candidate winding sections per phase (2 = the paper's model); the "
                    "identification keeps the best the spectra support.")
-@click.option("--sections-by", type=click.Choice(["spectra", "records"]), default="spectra",
+@click.option("--sections-by", type=click.Choice(get_args(SectionsBy)), default="spectra",
               show_default=True,
               help="Choose the winding-section count by the impedance spectra alone, or "
                    "among the spectra's choice and its neighbours by the fit of the "

@@ -8,7 +8,10 @@ least-squares identification can carry into a different end point. Measured on
 independent bench 111 (2 cores, ``reproduce(sections=(6,))`` called from Python): 184 s
 with numpy's default two OpenBLAS threads against 51 s with one, and rotating peak errors
 of 0.49-0.99 % against the CLI's 1.02-1.98 %: the library and the CLI disagreed. With the
-cap the library call takes the CLI's time and gives its numbers.
+cap the library call takes the CLI's time and gives its numbers. The vector fit follows
+the rounding too (2 of the 29 vfbench files of up to 4 ports fit another order on numpy's
+default two threads: diff_2xthru 38 against 40 poles capped, mlin 21 against 22), so its
+public functions are wrapped as well.
 
 :func:`blas_threads` is the count (1, or ``VFMODEL_BLAS_THREADS``); :func:`limited_blas`
 applies it to the BLAS libraries already loaded (threadpoolctl; 4 us per call when nothing
@@ -43,7 +46,10 @@ def blas_threads() -> int:
         return 1
 
 
-_ACTIVE: list[str] = []  # thread counts of the limited_blas blocks open in this process
+# thread counts of the limited_blas blocks open in this process (BLAS thread limits are
+# per process, so threads of one process share the stack: a block that ends restores the
+# count for all of them)
+_ACTIVE: list[str] = []
 
 
 @contextlib.contextmanager
@@ -117,7 +123,5 @@ def one_thread_here() -> None:
     """One BLAS thread for the rest of this process (a forked worker: the workers fill the
     cores)."""
     os.environ.update(dict.fromkeys(BLAS_ENV, "1"))
-    if "numpy" in sys.modules:
-        from threadpoolctl import threadpool_limits
-
-        threadpool_limits(limits=1, user_api="blas")
+    if "numpy" in sys.modules and not _already("1"):
+        _controller().limit(limits=1, user_api="blas")  # applied when made, kept

@@ -26,20 +26,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
+from vfmodel._choices import SectionsBy
 from vfmodel.core.dataset import Dataset
 from vfmodel.greybox.identify import Identification, identify
 
 __all__ = ["SectionsBy", "identify_by_records", "neighbour_sections", "record_score"]
-
-SectionsBy = Literal["spectra", "records"]
-"""How the winding-section count is chosen: by the impedance spectra alone
-(:func:`~vfmodel.greybox.identify.identify`) or by the rotating records among the spectra's
-choice and its neighbours (:func:`identify_by_records`)."""
-
 
 def record_score(ident: Identification) -> float | None:
     """Mean over the rotating speeds of ``ln(sum r^2 / n)``, ``r`` the whitened residual of

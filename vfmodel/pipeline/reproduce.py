@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from vfmodel._choices import check_choice
+from vfmodel._choices import SectionsBy, check_choice
 from vfmodel.circuit.spice_export import to_spice
 from vfmodel.core.blas import capped_blas
 from vfmodel.core.dataset import Dataset
@@ -86,7 +86,7 @@ from vfmodel.greybox.params import ParamSet
 from vfmodel.greybox.path_prior import with_path_prior
 from vfmodel.greybox.priors import parameter_priors
 from vfmodel.greybox.propagate import with_machine_uncertainty
-from vfmodel.greybox.section_choice import SectionsBy, identify_by_records
+from vfmodel.greybox.section_choice import identify_by_records
 
 __all__ = ["ReproduceResult", "SpeedResult", "netlist_text", "reproduce", "rpm_key"]
 
@@ -407,7 +407,7 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                    for s in ident.speeds},
         "sections_by": sections_by,
     }
-    if scores is not None:  # mean ln chi2_red of the rotating records per count tried
+    if scores is not None:  # per count tried: section_choice.record_score
         res["model"]["section_scores"] = {str(n): None if v is None else _f(v)
                                           for n, v in scores.items()}
     bb = None

@@ -291,8 +291,9 @@ def _section_scores(model: dict[str, Any]) -> str:
     if not sc:
         return ""
     got = ", ".join(f"{E(k)}: {'-' if v is None else f'{v:.3f}'}" for k, v in sc.items())
-    return ("<p>Section count chosen by the rotating records (mean ln χ²<sub>red</sub> of "
-            f"the rotating speeds' stages per count, lowest kept): {got}.</p>")
+    return ("<p>Section count chosen by the rotating records (per count: the mean over the "
+            "rotating speeds of ln of the final model's record misfit, Σr²/n of the whitened "
+            f"residual; lowest kept): {got}.</p>")
 
 
 def _bvr(r: dict[str, Any]) -> str:
