@@ -65,6 +65,7 @@ __all__ = [
     "common_mode",
     "divider_capacitances",
     "film_equivalent",
+    "film_time_constant",
     "predict_bvr",
 ]
 
@@ -166,6 +167,24 @@ def divider_capacitances(params: ParamSet | Mapping[str, float],
     c_b = film + v["bearing.C_air"] + (v["bearing.C_edge"]
                                        if "hertzian_edge_capacitance" in eff else 0.0)
     return {"c_wr": c_wr, "c_rf": c_rf, "c_b": c_b, "bvr": c_wr / (c_wr + c_rf + 2 * c_b)}
+
+
+def film_time_constant(params: ParamSet | Mapping[str, float],
+                       effects: Iterable[str]) -> float:
+    """Slowest relaxation time of the lubricant film's layers (s): ``R_1 C_1 (1 + k_d)``
+    and, with the two-layer film, ``R_2 C_2`` (each layer's resistance discharges its own
+    capacitance). The film's DC resistance (:func:`film_equivalent`) shows in a record
+    only through these discharges: a layer whose corner ``1 / (2 pi tau)`` lies below the
+    record's frequency resolution ``1 / T`` acts there as a capacitor, and its resistance
+    is an extrapolation to 0 Hz."""
+    eff = set(effects)
+    v = _pget(params)
+    c1 = v["lubricant.C_1"] * (1 + v["lubricant.k_d"]
+                               if "lubricant_dielectric_loss" in eff else 1.0)
+    tau = v["lubricant.R_1"] * c1
+    if "lubricant_two_layer" in eff:
+        tau = max(tau, v["lubricant.R_2"] * v["lubricant.C_2"])
+    return float(tau)
 
 
 BEARING_C_REF_HZ = 100e3

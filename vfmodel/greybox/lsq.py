@@ -273,6 +273,26 @@ def _bounds(q0: float, sd: float, level_z: float) -> dict[str, float | None]:
     return {"lo": q0 * float(np.exp(-level_z * sd)), "hi": q0 * float(np.exp(level_z * sd))}
 
 
+def lower_bound_only(interval: dict[str, float | None], tau_interval: dict[str, float | None],
+                     record_s: float) -> dict[str, Any]:
+    """The interval of a DC resistance that a record of ``record_s`` seconds sees only
+    through a discharge of time constant ``tau`` (``tau_interval``, e.g. of
+    :func:`vfmodel.greybox.bearing.film_time_constant`): when the corner ``1 / (2 pi tau)``
+    may lie below the record's resolution ``1 / record_s`` (``2 pi tau_hi > record_s``, or
+    ``tau`` not bounded), a larger resistance only moves that corner further below the
+    band, so the record bounds the resistance from below only: ``hi`` becomes None and
+    ``bound`` says ``"lower"`` (else ``"two-sided"``); ``time_constant_s`` holds the
+    interval of ``tau`` and ``record_s`` the record's duration."""
+    hi_tau = tau_interval.get("hi")
+    resolved = hi_tau is not None and 2.0 * np.pi * float(hi_tau) <= record_s
+    out: dict[str, Any] = {**interval, "bound": "two-sided" if resolved else "lower",
+           "time_constant_s": {k: tau_interval.get(k) for k in ("value", "lo", "hi")},
+           "record_s": float(record_s)}
+    if not resolved:
+        out["hi"] = None
+    return out
+
+
 def widen_interval(interval: dict[str, float | None], shift_log: float,
                    level_z: float = Z95) -> dict[str, float | None]:
     """``interval`` (:func:`log_interval`) with a structural shift: ``std_log`` combined in

@@ -51,6 +51,7 @@ from vfmodel.greybox.bearing import (
     bvr_baseline,
     divider_capacitances,
     film_equivalent,
+    film_time_constant,
     predict_bvr,
 )
 from vfmodel.greybox.bearing import bvr as bvr_estimate
@@ -70,7 +71,7 @@ from vfmodel.greybox.identify import (
     identify,
 )
 from vfmodel.greybox.joint import SHARED
-from vfmodel.greybox.lsq import LogCovariance, log_interval, widen_interval
+from vfmodel.greybox.lsq import LogCovariance, log_interval, lower_bound_only, widen_interval
 from vfmodel.greybox.metrics import (
     coherence_coefficient,
     mape_pct,
@@ -105,7 +106,10 @@ INTERVAL_METHOD = {
                           "model_error_log^2, model_error_log = |beta| tau, tau from "
                           "lubricant_interval.model_error (vfmodel.greybox.model_error), "
                           "beta the regression of log q on log cm_transfer_100khz in the "
-                          "speed's own stage covariance",
+                          "speed's own stage covariance; r_ohm is a lower bound only "
+                          "(bound 'lower', hi null) when 2 pi times the 95 % upper end of "
+                          "the film's slowest time constant (time_constant_s) exceeds the "
+                          "record's duration (record_s)",
 }
 """How results.json's 95 % intervals are formed (``model.interval_method``)."""
 
@@ -346,7 +350,11 @@ def reproduce(dataset: Dataset, *, effects: Iterable[str] = PAPER_EFFECTS,
                          anchor_report=sf.report, before=ident.stagewise.get(sf.speed_rpm))
 
             entry["lubricant_interval"] = {
-                "r_ohm": iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
+                # the DC resistance: bounded from below only when the film's discharge
+                # may be slower than the record resolves (lsq.lower_bound_only)
+                "r_ohm": lower_bound_only(iv(lambda q: film_equivalent(q, eff)["r_ohm"]),
+                                          iv(lambda q: film_time_constant(q, eff)),
+                                          prep.n_samples / prep.fs),
                 "c_f": iv(lambda q: film_equivalent(q, eff)["c_f"]),
                 "c_b_f": iv(lambda q: divider_capacitances(q, eff)["c_b"]),
                 "c_b_100khz_f": iv(lambda q: bearing_capacitance(q, eff)),

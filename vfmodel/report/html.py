@@ -89,6 +89,9 @@ def _interval(iv: dict[str, Any] | None, unit: str, key: Sequence[str]) -> tuple
     if not iv:
         return "–", ""
     v = num(iv.get("value"), unit, [*key, "value"])
+    if iv.get("lo") is not None and iv.get("hi") is None:  # a one-sided bound
+        return (f"{v} <span class='info'>[≥ {num(iv['lo'], unit, [*key, 'lo'])}]</span>",
+                _flag(None))
     if iv.get("lo") is None or iv.get("hi") is None:
         return f"{v} (unbounded)", _flag(None)
     return (f"{v} <span class='info'>[{num(iv['lo'], unit, [*key, 'lo'])} … "
@@ -278,7 +281,11 @@ def _film(r: dict[str, Any]) -> str:
             + "<p class='note'>R_film: DC resistance of the film (layers in series); C_film: "
             "its capacitance above the RC corners; bearing C at 100 kHz: Im Y / ω of the "
             "whole bearing. At standstill the metallic contact shorts the film (reported "
-            "as 0). H_cm: bearing voltage per volt of common-mode terminal voltage. Intervals: "
+            "as 0). R_film is bounded from below only ([≥ …]) when the film's slowest "
+            "discharge may be slower than the record resolves (its time constant's 95 % "
+            "upper end beyond the record's duration / 2π): a larger resistance then only "
+            "moves the film's corner further below the band. H_cm: bearing voltage per "
+            "volt of common-mode terminal voltage. Intervals: "
             "delta method on the covariance of log p of the speed's stage, plus the "
             "structural model error (model error: RMS log discrepancy of the model's "
             "common-mode H1 from the measured one near 100 kHz, less its noise), carried "
