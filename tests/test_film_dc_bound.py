@@ -80,3 +80,15 @@ def test_lower_bound_only_when_the_corner_may_leave_the_band() -> None:
     assert free["bound"] == "lower" and free["hi"] is None
     assert r["hi"] is not None
     json.dumps([fast, slow, free], allow_nan=False)
+
+
+def test_report_shows_a_lower_bound() -> None:
+    from vfmodel.report.html import _interval
+
+    text, flag = _interval({"value": 2.4e4, "lo": 122.0, "hi": None, "std_log": 2.7,
+                            "bound": "lower"}, "Ω", ["bearing", "100", "lubricant_interval",
+                                                     "r_ohm"])
+    assert "[≥ " in text and "122" in text and "…" not in text
+    assert "bounded below only" in flag
+    both, _ = _interval(_iv(1e5, 0.3), "Ω", ["r"])
+    assert "…" in both and "≥" not in both

@@ -91,7 +91,7 @@ def _interval(iv: dict[str, Any] | None, unit: str, key: Sequence[str]) -> tuple
     v = num(iv.get("value"), unit, [*key, "value"])
     if iv.get("lo") is not None and iv.get("hi") is None:  # a one-sided bound
         return (f"{v} <span class='info'>[≥ {num(iv['lo'], unit, [*key, 'lo'])}]</span>",
-                _flag(None))
+                "<span class='weak'>bounded below only (slower than the record)</span>")
     if iv.get("lo") is None or iv.get("hi") is None:
         return f"{v} (unbounded)", _flag(None)
     return (f"{v} <span class='info'>[{num(iv['lo'], unit, [*key, 'lo'])} … "
