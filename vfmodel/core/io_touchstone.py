@@ -36,6 +36,13 @@ _PARAMS = ("S", "Y", "Z", "G", "H")
 _FORMATS = ("DB", "MA", "RI")
 
 
+# Touchstone 1.1 requires the option line (its fields default, the line does not); some
+# readers (scikit-rf) then assume the fields' defaults, which the message offers
+_NO_OPTION = ("an option line like '# Hz S RI R 50' before the data (Touchstone requires "
+              "one; '# GHz S MA R 50' states the defaults of its fields, which some readers "
+              "assume for a file without it)")
+
+
 class OptionLine:
     """The parsed option line: frequency multiplier, parameter, format, R."""
 
@@ -130,8 +137,7 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
                              place=place, expected="'[Version] 2.0' as the first keyword")
         if opt is None:
             raise InputError("no Touchstone option line before the data", source=src,
-                             place=place,
-                             expected="a line like '# Hz S RI R 50' before the data")
+                             place=place, expected=_NO_OPTION)
         try:
             vals = [float(t) for t in s.split()]
         except ValueError:
@@ -171,8 +177,7 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
             prev_f = data[-per_row]
             cur = 0
     if opt is None:
-        raise InputError("no Touchstone option line", source=src,
-                         expected="a line like '# Hz S RI R 50' before the data")
+        raise InputError("no Touchstone option line", source=src, expected=_NO_OPTION)
     if cur != 0:
         raise InputError(f"last row incomplete for a {n}-port file", source=src,
                          found=f"{cur} numbers", expected=f"{per_row}")
