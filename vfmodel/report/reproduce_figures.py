@@ -124,7 +124,19 @@ def _lubricant(res: ReproduceResult, out: Path) -> str | None:
     plt = pyplot()
     fig, (ar, ac) = plt.subplots(1, 2, figsize=(10, 4))
     sp = [r[0] for r in rows]
-    ar.semilogy(sp, [r[1]["r_ohm"] for r in rows], "o-")
+    ar.semilogy(sp, [r[1]["r_ohm"] for r in rows], "o-", label="fitted")
+    # the 95 % bounds of results.json: two-sided where the record resolves the film's
+    # discharge, the lower end alone where it may be slower (lsq.lower_bound_only)
+    ivs = [(float(k), v.get("lubricant_interval", {}).get("r_ohm") or {}) for k, v in b.items()
+           if isinstance(v, dict) and v.get("state") == "rotating"]
+    lo = [(k, iv["lo"]) for k, iv in sorted(ivs, key=lambda t: t[0]) if iv.get("lo") is not None]
+    hi = [(k, iv["hi"]) for k, iv in sorted(ivs, key=lambda t: t[0]) if iv.get("hi") is not None]
+    if lo:
+        ar.plot(*zip(*lo, strict=True), "^", color="C2", label="95 % lower bound")
+    if hi:
+        ar.plot(*zip(*hi, strict=True), "v", color="C3", label="95 % upper bound")
+    if lo or hi:
+        ar.legend(fontsize=8)
     ac.plot(sp, [r[1]["c_f"] * 1e9 for r in rows], "o-")
     ar.set_title("equivalent film resistance")
     ar.set_ylabel("R (ohm)")
