@@ -285,6 +285,27 @@ def test_delay_extraction_cuts_the_order() -> None:
     assert check.passive and model.delay == pytest.approx(tau, rel=0.05)
 
 
+def test_delay_estimate_follows_the_transmission() -> None:
+    # a 2-port whose reflections carry more energy than the transmission (a filter's
+    # stopband): the common delay is the transmission's (the reflection has none)
+    from vfmodel.fitting._fit_setup import _delay
+
+    f = np.linspace(1e7, 5e9, 600)
+    s = 2j * np.pi * f
+    tau = 5e-9
+    v = np.empty((f.size, 2, 2), complex)
+    v[:, 0, 0] = v[:, 1, 1] = 0.9 / (1 + s / (2 * np.pi * 2e9))
+    v[:, 0, 1] = v[:, 1, 0] = 0.3 * np.exp(-s * tau)
+    est = _delay(FrequencyData(f, v, kind="S"), "auto")
+    assert est == pytest.approx(tau, rel=1e-6)   # exact phase slope, no noise
+    # a negligible transmission (< 1 % of the largest entry's energy) is not followed: the
+    # largest entry's delay is taken (here a reflection delayed by 2 ns; its pole adds
+    # about 1 / (2 pi 2 GHz) = 0.08 ns at low frequencies, less over the band)
+    v[:, 0, 0] = v[:, 1, 1] = v[:, 0, 0] * np.exp(-s * 2e-9)
+    v[:, 0, 1] = v[:, 1, 0] = 0.003 * np.exp(-s * tau)
+    assert _delay(FrequencyData(f, v, kind="S"), "auto") == pytest.approx(2e-9, rel=0.05)
+
+
 def test_delayed_line_enforcement_needs_few_programs() -> None:
     """The delayed-line model of test_delay_extraction_cuts_the_order (5-10 poles by the
     BLAS kernel, sigma_max up to 86 from 14 GHz up) is certified within 15 programs.

@@ -193,9 +193,18 @@ def _delay(fd: FrequencyData, delay: Any) -> float:
         if delay == "none" or fd.kind in ("Z", "Y") or _phase_turns(fd) <= _DELAY_TURNS:
             return 0.0
         h = fd.values.reshape(fd.n_freq, -1)
-        j = int(np.argmax(np.sum(np.abs(h) ** 2, axis=0)))
+        energy = np.sum(np.abs(h) ** 2, axis=0)
+        j = int(np.argmax(energy))
+        if fd.n_out == fd.n_in > 1:
+            # the delay is the transmissions': the largest off-diagonal entry unless it is
+            # negligible (a filter's stopband leaves the reflections the larger entries; a
+            # 16,001-point filter-and-line file gave a reflection's 0.16 ns for a 1.48 ns line)
+            off = np.flatnonzero(~np.eye(fd.n_out, dtype=bool).ravel())
+            k = int(off[np.argmax(energy[off])])
+            if energy[k] >= 1e-2 * energy[j]:
+                j = k
         ph = np.unwrap(np.angle(h[:, j]))
-        # least-squares group delay of the largest entry (a transmission)
+        # least-squares group delay of that entry
         return max(-float(np.polyfit(fd.omega, ph, 1)[0]), 0.0)
     tau = float(delay)
     if not (np.isfinite(tau) and tau >= 0):
