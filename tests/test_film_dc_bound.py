@@ -92,3 +92,7 @@ def test_report_shows_a_lower_bound() -> None:
     assert "bounded below only" in flag
     both, _ = _interval(_iv(1e5, 0.3), "Ω", ["r"])
     assert "…" in both and "≥" not in both
+    # without a bound the data give none (lower_bound_only with tau unbounded and no lo)
+    none, flag = _interval({"value": 1e5, "lo": None, "hi": None, "std_log": None,
+                            "bound": "lower"}, "Ω", ["r"])
+    assert "unbounded" in none and "not determined" in flag

@@ -108,6 +108,25 @@ def test_numbers_against_the_bench(run: tuple[Path, Path, dict[str, Any]]) -> No
     assert r["bearing"]["0"]["rel_err_pct"] < r["baseline_bvr"]["0"]["rel_err_pct"]
 
 
+def test_film_resistance_bound_follows_its_time_constant(
+        run: tuple[Path, Path, dict[str, Any]]) -> None:
+    """results.json's film R interval at speed: a lower bound alone exactly when 2 pi times
+    the 95 % upper end of the film's time constant exceeds the record's duration (n / fs of
+    the recording), two-sided otherwise; strict JSON either way (greybox.lsq.lower_bound_only)."""
+    ds, out, _ = run
+    r = json.loads((out / "results.json").read_text())
+    rec = read_dataset(ds).recording_at(200.0)
+    iv = r["bearing"]["200"]["lubricant_interval"]["r_ohm"]
+    assert iv["record_s"] == pytest.approx(rec.bearing.size / rec.fs, rel=1e-12)
+    tau_hi = iv["time_constant_s"]["hi"]
+    slow = tau_hi is None or 2 * np.pi * tau_hi > iv["record_s"]
+    assert iv["bound"] == ("lower" if slow else "two-sided")
+    assert (iv["hi"] is None) == slow
+    assert iv["value"] == pytest.approx(r["bearing"]["200"]["lubricant"]["r_ohm"], rel=1e-12)
+    if iv["lo"] is not None:
+        assert iv["lo"] < iv["value"]
+
+
 def test_netlist_reproduces_model_impedance(run: tuple[Path, Path, dict[str, Any]]) -> None:
     _, out, _ = run
     r = json.loads((out / "results.json").read_text())

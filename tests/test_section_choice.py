@@ -26,6 +26,15 @@ from vfmodel.greybox.section_choice import (
 from vfmodel.pipeline.reproduce import reproduce
 
 
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The small test bench the real identifications below share (read only)."""
+    ds = tmp_path_factory.mktemp("sections") / "bench"
+    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
+                                             n_freq=81, n_coils=2, n_rungs=4)
+    return ds
+
+
 def _fake(n: int, chi2: list[float], standstill: bool = True) -> Any:
     """An Identification-like object: ``n`` sections, rotating speeds whose record terms
     give whitened residuals of mean square ``chi2`` (four equal entries each). Their stage
@@ -52,14 +61,11 @@ def test_record_score_is_the_mean_log_misfit_of_the_rotating_records() -> None:
 
 
 def test_record_score_of_a_real_identification_matches_its_lubricant_stage(
-        tmp_path: Path) -> None:
+        bench: Path) -> None:
     """Without a joint stage the score is the lubricant stage's reduced chi-square (which
     divides by m - n and adds the prior's rows: within 1 %); with a kept joint stage the
     speed's report is the joint fit's and differs, the score still measures the record."""
-    ds = tmp_path / "bench"
-    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
-                                             n_freq=81, n_coils=2, n_rungs=4)
-    data = read_dataset(ds)
+    data = read_dataset(bench)
     plain = identify(data, sections=(2,), max_nfev=12)
     rep = next(f.report for f in plain.speeds if f.state == "rotating")
     assert rep is not None and rep.name.startswith("lubricant")
@@ -98,14 +104,11 @@ def test_the_count_with_the_best_record_fit_is_kept() -> None:
     assert calls[1][1]["impedance_fits"] == {4: "fit"}  # the first run's impedance stages
 
 
-def test_reused_impedance_fits_give_the_same_identification(tmp_path: Path) -> None:
+def test_reused_impedance_fits_give_the_same_identification(bench: Path) -> None:
     """A count whose impedance stage was fitted before (``impedance_fits``) is not fitted
     again and the identification is the one fitting it anew gives (the stages are
     independent of each other); the first run returns every count it fitted."""
-    ds = tmp_path / "bench"
-    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
-                                             n_freq=81, n_coils=2, n_rungs=4)
-    data = read_dataset(ds)
+    data = read_dataset(bench)
     first = identify(data, sections=(2, 3), max_nfev=6, max_nfev_lubricant=4)
     assert sorted(first.impedance_fits) == [2, 3]
     other = 5 - first.spec.n_sections
@@ -138,14 +141,11 @@ def test_reproduce_refuses_an_unknown_choice() -> None:
                   sections_by="coils")  # type: ignore[arg-type]
 
 
-def test_cli_records_choice_end_to_end(tmp_path: Path) -> None:
+def test_cli_records_choice_end_to_end(bench: Path, tmp_path: Path) -> None:
     """Two candidate counts on the small bench: both are identified, their scores are in
     results.json and the count kept is the one with the lower score."""
-    ds = tmp_path / "bench"
-    load_script("make_testbench").make_bench(ds, seed=2, speeds=(0.0, 200.0), periods=1,
-                                             n_freq=81, n_coils=2, n_rungs=4)
     out = tmp_path / "out"
-    code = main(["reproduce", str(ds), "--out", str(out), "--sections", "2,3",
+    code = main(["reproduce", str(bench), "--out", str(out), "--sections", "2,3",
                  "--sections-by", "records", "--max-nfev", "12", "--max-nfev-lubricant",
                  "12", "--lubricant-random-starts", "0", "--no-blackbox", "--quiet"])
     assert code == 0

@@ -89,7 +89,7 @@ def _interval(iv: dict[str, Any] | None, unit: str, key: Sequence[str]) -> tuple
     if not iv:
         return "–", ""
     v = num(iv.get("value"), unit, [*key, "value"])
-    if iv.get("lo") is not None and iv.get("hi") is None:  # a one-sided bound
+    if iv.get("bound") == "lower" and iv.get("lo") is not None:  # lsq.lower_bound_only
         return (f"{v} <span class='info'>[≥ {num(iv['lo'], unit, [*key, 'lo'])}]</span>",
                 "<span class='weak'>bounded below only (slower than the record)</span>")
     if iv.get("lo") is None or iv.get("hi") is None:

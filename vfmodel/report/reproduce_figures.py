@@ -116,28 +116,26 @@ def _bvr_f(s: SpeedResult, out: Path) -> str:
 
 def _lubricant(res: ReproduceResult, out: Path) -> str | None:
     b: Any = res.results["bearing"]
-    rows = [(float(k), v["lubricant"]) for k, v in b.items()
-            if isinstance(v, dict) and v.get("state") == "rotating"]
+    rows = sorted(((float(k), v) for k, v in b.items()
+                   if isinstance(v, dict) and v.get("state") == "rotating"), key=lambda t: t[0])
     if not rows:
         return None
-    rows.sort()
     plt = pyplot()
     fig, (ar, ac) = plt.subplots(1, 2, figsize=(10, 4))
-    sp = [r[0] for r in rows]
-    ar.semilogy(sp, [r[1]["r_ohm"] for r in rows], "o-", label="fitted")
+    sp = [k for k, _ in rows]
+    ar.semilogy(sp, [v["lubricant"]["r_ohm"] for _, v in rows], "o-", label="fitted")
     # the 95 % bounds of results.json: two-sided where the record resolves the film's
     # discharge, the lower end alone where it may be slower (lsq.lower_bound_only)
-    ivs = [(float(k), v.get("lubricant_interval", {}).get("r_ohm") or {}) for k, v in b.items()
-           if isinstance(v, dict) and v.get("state") == "rotating"]
-    lo = [(k, iv["lo"]) for k, iv in sorted(ivs, key=lambda t: t[0]) if iv.get("lo") is not None]
-    hi = [(k, iv["hi"]) for k, iv in sorted(ivs, key=lambda t: t[0]) if iv.get("hi") is not None]
+    ivs = [(k, v.get("lubricant_interval", {}).get("r_ohm") or {}) for k, v in rows]
+    lo = [(k, iv["lo"]) for k, iv in ivs if iv.get("lo") is not None]
+    hi = [(k, iv["hi"]) for k, iv in ivs if iv.get("hi") is not None]
     if lo:
         ar.plot(*zip(*lo, strict=True), "^", color="C2", label="95 % lower bound")
     if hi:
         ar.plot(*zip(*hi, strict=True), "v", color="C3", label="95 % upper bound")
     if lo or hi:
         ar.legend(fontsize=8)
-    ac.plot(sp, [r[1]["c_f"] * 1e9 for r in rows], "o-")
+    ac.plot(sp, [v["lubricant"]["c_f"] * 1e9 for _, v in rows], "o-")
     ar.set_title("equivalent film resistance")
     ar.set_ylabel("R (ohm)")
     ac.set_title("equivalent film capacitance")
