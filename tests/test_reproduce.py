@@ -114,7 +114,11 @@ def test_film_resistance_bound_follows_its_time_constant(
     the 95 % upper end of the film's time constant exceeds the record's duration (n / fs of
     the recording), two-sided otherwise; strict JSON either way (greybox.lsq.lower_bound_only)."""
     ds, out, _ = run
-    r = json.loads((out / "results.json").read_text())
+
+    def refuse(token: str) -> None:
+        raise AssertionError(f"results.json holds {token}")
+
+    r = json.loads((out / "results.json").read_text(), parse_constant=refuse)
     rec = read_dataset(ds).recording_at(200.0)
     iv = r["bearing"]["200"]["lubricant_interval"]["r_ohm"]
     assert iv["record_s"] == pytest.approx(rec.bearing.size / rec.fs, rel=1e-12)
