@@ -46,7 +46,10 @@ recordings are not offered: no parameter of the network depends on the edge rate
 while the film law's thickness would follow the oil's viscosity at another temperature
 (``h ~ (eta_0 u)^0.67``, an equivalent speed), the film resistance also follows the oil's
 resistivity and the relaxation ``k_d``, ``tau_d`` the temperature, by laws the dataset
-does not give. Each
+does not give. (For the edge capacitance one further temperature would not do either: a
+power law plus a constant sampled at two viscosities is a power law with another exponent;
+a sweep of two further temperatures would separate it, ``docs/notes.md``, "one further
+temperature does not separate the edge capacitance"; not built.) Each
 (effect, measurement) keeps its most separating speed; the list is ranked by
 ``expected_delta_chi2``, largest first. ``decisive`` marks a separation above the
 detective's own acceptance, ``10 + k ln m`` (``k`` the effect's parameters, ``m`` the
