@@ -124,3 +124,27 @@ def test_sampling_method_and_worst_violation_agree_with_reference() -> None:
         worst_ref = -ref_margin(model, w).min()
         assert ham.worst_violation >= worst_ref * (1 - 1e-9)
         assert ham.worst_violation <= worst_ref * (1 + 1e-3)
+
+
+def test_describe_names_an_asymptotic_violation_without_bands() -> None:
+    # a lossless 4-port balun fitted to 8e-13 gave sigma_max(D) = 1 + 3.2e-13 and no band;
+    # the CLI said "NOT passive (0 violation bands)". Reference: D = 1 + 3e-13 and a pole
+    # with zero residue, so sigma_max(H(jw)) = 1 + 3e-13 at every frequency: below the
+    # band test's tolerance, caught by the asymptotic condition
+    s = RationalModel(poles=[-1e6], residues=[0.0], d=[[1.0 + 3e-13]], kind="S")
+    rep = check_passivity(s)
+    assert not rep.passive and rep.bands_hz == ()
+    text = rep.describe()
+    assert "violation band" not in text
+    assert "at infinity: sigma_max(D) = 1 + 3" in text and "e-13" in text
+    # above the tolerance the same violation is a band from 0 Hz to infinity
+    big = check_passivity(RationalModel(poles=[-1e6], residues=[0.0], d=[[1.0 + 1e-7]],
+                                        kind="S"))
+    assert big.bands_hz == ((0.0, np.inf),)
+    assert big.describe().startswith("NOT passive (1 violation band; at infinity")
+    # a band: counted, singular
+    z = RationalModel(poles=[-2 * np.pi * 1e5], residues=[-3.0 * 2 * np.pi * 1e5], d=[[1.0]],
+                      kind="Z")
+    assert check_passivity(z).describe().startswith("NOT passive (1 violation band;")
+    ok = RationalModel(poles=[-1 / (50.0 * 1e-9)], residues=[1 / 1e-9], kind="Z")
+    assert check_passivity(ok).describe() == "passive (certified)"

@@ -143,9 +143,7 @@ def _fit(spectra: tuple[Path, ...], n_order: int | str, kind: str | None, weight
     from vfmodel.report.fit_html import write_fit_html
 
     write_fit_html(stage / "report.html", finite_json(obj), [] if no_plot else ["fit.png"])
-    status = "not checked" if res.passivity is None else (
-        "passive (certified)" if res.passivity.passive else
-        f"NOT passive ({len(res.passivity.bands_hz)} violation bands)")
+    status = "not checked" if res.passivity is None else res.passivity.describe()
     click.echo(f"fitted {res.data.n_out}x{res.data.n_in} {res.data.kind}, "
                f"{res.model.n_poles} poles ({res.fit.order_reason})")
     click.echo(f"rel RMS error {res.rel_rms_error:.3e} (unconstrained "

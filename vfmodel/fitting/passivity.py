@@ -119,6 +119,38 @@ class PassivityReport:
     notes: tuple[str, ...] = ()
     min_margin: float | None = None
 
+    def describe(self) -> str:
+        """One line: "passive (certified)", or why not -- unstable poles, violation bands,
+        an asymptotic violation (a model with no band can still violate at infinity:
+        sigma_max(D) = 1 + 3e-13 for a lossless 4-port balun fitted to 8e-13) -- and the
+        worst violation with its frequency."""
+        if self.passive:
+            return "passive (certified)" if self.method == "hamiltonian" else \
+                "passive (sampled, not certified)"
+        why = []
+        if not self.stable:
+            why.append("unstable poles")
+        if self.bands_hz:
+            n = len(self.bands_hz)
+            why.append(f"{n} violation band{'s' if n > 1 else ''}")
+        if not self.asymptotic_ok:
+            if self.kind == "S":
+                why.append("at infinity: " + (f"sigma_max(D) = 1 + {-self.d_margin:.3g}"
+                                              if self.d_margin < 0 else "E is not 0"))
+            else:
+                why.append("at infinity: " + (
+                    f"smallest eigenvalue of (D + D^T)/2 {self.d_margin:.3g}"
+                    if self.d_margin < 0 else "E is not symmetric positive semidefinite"))
+        if not why:
+            why.append("a sampled violation")
+        text = "NOT passive (" + "; ".join(why)
+        if self.worst_violation > 0:
+            f = self.worst_freq_hz
+            where = "" if f is None else (" at infinity" if not np.isfinite(f)
+                                          else f" at {f:.4g} Hz")
+            text += f"; worst violation {self.worst_violation:.3g}{where}"
+        return text + ")"
+
     def _repr_html_(self) -> str:
         """Compact summary in Jupyter (:mod:`vfmodel.report.notebook`)."""
         from vfmodel.report.notebook import passivity_html
