@@ -220,14 +220,10 @@ class FrequencyData:
         """Read a :class:`skrf.Network` as Z, Y or S data (S at the network's real z0)."""
         z0s = np.asarray(network.z0)
         z0 = complex(z0s.flat[0]) if z0s.size else 50.0
-        if z0s.size and (not np.allclose(z0s, z0) or abs(z0.imag) > 0):
-            raise InputError(
-                "only a real reference impedance common to all ports is supported",
-                source=source or network.name,
-                found=f"z0 values {np.unique(z0s)[:4]}",
-            )
         if kind not in ("S", "Z", "Y"):
             raise InputError(f"a network cannot be read as {kind}", expected="Z, Y or S")
+        if z0s.size and (not np.allclose(z0s, z0) or abs(z0.imag) > 0):
+            network, z0 = _common_reference(network, z0s, kind, source or network.name)
         # only the kind asked for: skrf converts on every access of .z and .y
         values = network.s if kind == "S" else network.z if kind == "Z" else network.y
         return cls(
@@ -287,3 +283,34 @@ def as_frequency_data(
                 )
             fd = fd.to_kind(kind)
     return fd
+
+
+def _common_reference(network: skrf.Network, z0s: NDArray[Any], kind: str, src: str
+                      ) -> tuple[skrf.Network, complex]:
+    """A network whose ports have different real reference impedances (Touchstone 2's
+    ``[Reference]``): Z and Y do not depend on them; S is renormalised to port 1's (with
+    scikit-rf, a :class:`~vfmodel.errors.VfmodelWarning` says so). Complex or
+    frequency-dependent references are refused."""
+    per_port = z0s.reshape(-1, z0s.shape[-1])
+    if not (np.all(np.isfinite(per_port)) and np.all(per_port.imag == 0)
+            and np.all(per_port.real > 0) and np.allclose(per_port, per_port[:1])):
+        raise InputError(
+            "only real, positive, frequency-independent reference impedances are supported",
+            source=src, found=f"z0 values {np.unique(z0s)[:4]}")
+    ref = float(per_port[0, 0].real)
+    if kind != "S":
+        return network, complex(ref)
+    import warnings
+
+    from vfmodel.errors import VfmodelWarning
+
+    out = network.copy()
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        out.renormalize(ref)
+    ports = ", ".join(f"{v:g}" for v in per_port[0].real)
+    warnings.warn(f"{src}: the ports' reference impedances differ ({ports} ohm); the "
+                  f"S-parameters are renormalised to port 1's {ref:g} ohm, the model's z0",
+                  VfmodelWarning, stacklevel=3)
+    return out, complex(ref)
+

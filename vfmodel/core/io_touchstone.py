@@ -29,7 +29,7 @@ import numpy as np
 
 from vfmodel._choices import Kind
 from vfmodel.core.frequency_data import FrequencyData
-from vfmodel.errors import InputError
+from vfmodel.errors import InputError, VfmodelWarning
 
 _UNITS = {"HZ": 1.0, "KHZ": 1e3, "MHZ": 1e6, "GHZ": 1e9}
 _PARAMS = ("S", "Y", "Z", "G", "H")
@@ -266,12 +266,16 @@ def _read_v2(text: str, src: str) -> FrequencyData:
                          found=opt.param, expected="S, Y or Z")
     kind: Kind = opt.param  # type: ignore[assignment]
     try:
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return FrequencyData.from_network(net, kind=kind, source=src)
+        with np.errstate(all="ignore"), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fd = FrequencyData.from_network(net, kind=kind, source=src)
     except np.linalg.LinAlgError as err:
         raise InputError(f"cannot convert the Touchstone data to {kind} parameters ({err})",
                          source=src) from None
+    for w in caught:  # scikit-rf's conversion warnings stay silent, vfmodel's are passed on
+        if issubclass(w.category, VfmodelWarning):
+            warnings.warn(w.message, w.category, stacklevel=2)
+    return fd
 
 
 _SUFFIX_RE = re.compile(r"^\.s(\d+)p$", re.IGNORECASE)

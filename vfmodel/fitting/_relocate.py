@@ -12,6 +12,7 @@ from vfmodel.fitting._vf_core import (
     _DIRECT_COLUMNS,
     _EXACT_FIT,
     _GRAM_ERROR,
+    _GRAM_ORDER,
     _TINY,
     Coefficients,
     ComplexArray,
@@ -242,7 +243,9 @@ def iterate(
     ``precise=None`` chooses the sigma rows per relocation from the error of the previous
     one (``err_hint`` before the first): the Gram form of :func:`relocate_poles` has an
     absolute error of about eps ||a2||^2 against a smallest eigenvalue of about
-    (err ||a2||)^2, so it is used only while err^2 is far above eps (err > 1e-4).
+    (err ||a2||)^2, so it is used only while err^2 is far above eps (err > 1e-4), and
+    below 64 poles (it squares the condition number of the sigma system, which grows with
+    the order).
 
     ``target`` > 0 (a trial that must reach that error): give up, not converged, when
     the error is above it and the last relocation gained less than half the relative
@@ -257,7 +260,8 @@ def iterate(
     pf, basis, _ = bases(prob, reps)
     last = err_hint
     for it in range(1, max_iterations + 1):
-        exact_rows = precise if precise is not None else bool(last <= _GRAM_ERROR)
+        exact_rows = precise if precise is not None else \
+            bool(last <= _GRAM_ERROR or n_poles(reps) >= _GRAM_ORDER)
         reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf, basis)
         reps = bound_real_poles(reps, prob.pole_bounds)
         pf, basis, _ = bases(prob, reps)
