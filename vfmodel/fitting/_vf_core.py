@@ -41,10 +41,6 @@ ComplexArray = NDArray[np.complex128]
 _TINY = 1e-300
 _EXACT_FIT = 1e-12  # weighted relative RMS error below which the data is matched exactly
 _GRAM_ERROR = 1e-4  # weighted error above which the Gram sigma rows are accurate enough
-# ... and the order below which they are: the Gram form squares the condition number of
-# the sigma system, which grows with the order; a cascade of three lines (2,001 points,
-# 15 phase turns) diverged from 2-5 % to 99 % in single relocations at 71-200 poles
-_GRAM_ORDER = 64
 # columns below which least squares call LAPACK directly (unblocked Householder QR, the
 # same rounding as numpy's and scipy's wrappers here; the blocked QR of numpy's and
 # scipy's OpenBLAS builds round differently, and the automatic order follows rounding)
