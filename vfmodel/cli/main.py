@@ -71,8 +71,13 @@ def main(argv: list[str] | None = None) -> int:
 
     keep_large_blocks()
 
+    from vfmodel.errors import VfmodelWarning
+
     with warnings.catch_warnings(), limited_blas(blas_threads()):
         warnings.showwarning = _show_warning
+        # vfmodel's own warnings are printed, whatever filters the interpreter runs with
+        # (under "-W error" a warning of the fit became "internal error", exit 1)
+        warnings.filterwarnings("always", category=VfmodelWarning)
         return _main(argv)
 
 

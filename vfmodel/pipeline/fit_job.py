@@ -30,6 +30,7 @@ from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
+from vfmodel.fitting.foster import backward_reflections
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import PassivityReport, check_passivity, enforce_passivity
@@ -146,9 +147,11 @@ def run_fit(
     _, unconstrained_rel, _ = fit_errors(model, data)
     progress("vector fit", 1, 2 if passive else 1)
     pas: PassivityReport | None = None
+    was_enforced = False
     if data.kind in ("Z", "Y", "S") and data.n_out == data.n_in:
         pas = check_passivity(model)
         if passive and not pas.passive:
+            was_enforced = True
             first: tuple[RationalModel, PassivityReport, FitReport] | None = None
             failure = ""
             # S models get a second chance with out-of-band anchors (below): the first
@@ -204,6 +207,10 @@ def run_fit(
         progress("vector fit", 2, 2)
     rms, rel, _ = fit_errors(model, data)
     report = replace(report, rms_error=rms, rel_rms_error=rel)  # errors of the final model
+    if was_enforced:
+        report = _beyond_bound(report, data, unconstrained_rel, dp.floor if dp else 0.0,
+                               enforce_margin if enforce_margin is not None else
+                               enforce_margin_for(unconstrained_rel, dp.floor if dp else 0.0))
     prms, pmax = point_errors(model, data)
     report = replace(report, point_rel_rms_error=prms, point_rel_max_error=pmax)
     return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
@@ -240,6 +247,29 @@ def enforce_margin_for(fit_error: float, floor: float) -> float:
     the floor keeps 100x above the certificate's tolerance (1e-12 of the response)."""
     base, share, least = _MARGIN
     return float(min(base, max(share * max(fit_error, floor), least)))
+
+
+def _beyond_bound(report: FitReport, data: FrequencyData, fit_rel: float, floor: float,
+                  margin: float) -> FitReport:
+    """A note (and a :class:`FitWarning`) when the enforced model ends beyond 1.2x
+    max(fit error, data floor) (and two margins): how far, and whether the data hold a
+    near-lossless reflection that turns the wrong way (:mod:`vfmodel.fitting.foster`)."""
+    bound = max(_ENFORCE_RATIO * max(fit_rel, floor), 2 * margin)
+    if report.rel_rms_error <= bound:
+        return report
+    ratio = report.rel_rms_error / max(fit_rel, floor, 1e-300)
+    note = (f"passivity enforcement left the model {ratio:.3g}x max(fit error "
+            f"{fit_rel:.3g}, data floor {floor:.3g}) from the data (beyond "
+            f"{_ENFORCE_RATIO}x)")
+    bad = backward_reflections(data)
+    if bad:
+        ports = ", ".join(f"{i + 1} ({100 * share:.0f} % of the band)" for i, share in bad)
+        note += (f": the reflection of port {ports} has a magnitude near 1 and turns "
+                 "counter-clockwise with frequency, which no causal passive port does "
+                 "(Foster's reactance theorem; a reference plane beyond the device?), so "
+                 "no passive model follows these data")
+    warnings.warn(note, FitWarning, stacklevel=3)
+    return replace(report, notes=(*report.notes, note))
 
 
 def _extra_poles_retry(
