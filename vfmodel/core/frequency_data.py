@@ -313,4 +313,3 @@ def _common_reference(network: skrf.Network, z0s: NDArray[Any], kind: str, src: 
                   f"S-parameters are renormalised to port 1's {ref:g} ohm, the model's z0",
                   VfmodelWarning, stacklevel=3)
     return out, complex(ref)
-

@@ -240,6 +240,7 @@ def _read_v2(text: str, src: str) -> FrequencyData:
         out.append(raw)
     if opt is None:
         opt = OptionLine()
+    _check_reference(text, src)
     fid = io.StringIO("\n".join(out) + "\n")
     fid.name = Path(src).name if Path(src).suffix.lower() == ".ts" else "data.ts"
     try:
@@ -276,6 +277,39 @@ def _read_v2(text: str, src: str) -> FrequencyData:
         if issubclass(w.category, VfmodelWarning):
             warnings.warn(w.message, w.category, stacklevel=2)
     return fd
+
+
+def _check_reference(text: str, src: str) -> None:
+    """The ``[Reference]`` keyword holds one number per port, on its line and the lines
+    after it up to the next keyword (scikit-rf reads on past the keyword: with one value
+    for a 2-port it took the first frequency of ``[Network Data]`` as port 2's reference
+    and dropped that row; with three, it ignored the third)."""
+    ports: int | None = None
+    ref: list[str] | None = None
+    for k, raw in enumerate(text.splitlines(), start=1):
+        s = raw.split("!", 1)[0].strip()
+        low = s.lower()
+        if low.startswith("[number of ports]"):
+            try:
+                ports = int(s.split("]", 1)[1])
+            except ValueError:
+                return  # scikit-rf's reader reports it
+        if ref is not None:
+            if s.startswith("[") or s.startswith("#"):
+                break
+            ref += s.split()
+        elif low.startswith("[reference]"):
+            ref, place = s.split("]", 1)[1].split(), f"line {k}"
+    if ref is None or ports is None:
+        return
+    try:
+        vals = [float(t) for t in ref]
+    except ValueError:
+        vals = []
+    if len(vals) != ports or len(ref) != ports:
+        raise InputError("[Reference] must give one reference impedance per port",
+                         source=src, place=place, found=" ".join(ref) or "nothing",
+                         expected=f"{ports} numbers (ohm)")
 
 
 _SUFFIX_RE = re.compile(r"^\.s(\d+)p$", re.IGNORECASE)

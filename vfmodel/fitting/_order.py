@@ -195,9 +195,7 @@ def _backward_prune(
         out, cost, fits = _eliminate(prob, coef, limit, den2)
         if fits:
             return out, cost
-        coef = out  # the most removals of that order within the limit (maybe none)
-        if out.reps.size == 0:
-            break
+        coef = out  # the most removals of that order within the limit
     return coef, core.removal_costs(prob, coef.reps)
 
 

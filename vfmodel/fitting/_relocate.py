@@ -224,6 +224,19 @@ _DIVERGED = 2.0  # a Gram relocation this much worse than the previous error is 
 _GRAM_ORDER = 100  # the exact sigma rows from this order on (see iterate)
 
 
+def _step(prob: Problem, reps: ComplexArray, pf: ComplexArray, basis: ComplexArray,
+          stable: bool, exact_rows: bool
+          ) -> tuple[ComplexArray, ComplexArray, ComplexArray, Coefficients, float, float]:
+    """One relocation of :func:`iterate` from ``reps`` (``pf``, ``basis`` their bases):
+    the new representatives, their bases, residues, sigma's deviation and the error."""
+    new, dev = relocate_poles(prob, reps, stable, exact_rows, pf, basis)
+    new = bound_real_poles(new, prob.pole_bounds)
+    pf_n, basis_n, _ = bases(prob, new)
+    coef = solve_residues(prob, new, pf_n, basis_n)
+    return new, pf_n, basis_n, coef, dev, weighted_rel_rms(prob, evaluate(prob, coef, pf_n,
+                                                                          basis_n))
+
+
 def iterate(
     prob: Problem,
     reps: ComplexArray,
@@ -270,22 +283,11 @@ def iterate(
     for it in range(1, max_iterations + 1):
         exact_rows = precise if precise is not None else \
             bool(last <= _GRAM_ERROR or n_poles(reps) >= _GRAM_ORDER)
-        start = (reps, pf, basis)
-        reps, dev = relocate_poles(prob, reps, stable, exact_rows, pf, basis)
-        reps = bound_real_poles(reps, prob.pole_bounds)
-        pf, basis, _ = bases(prob, reps)
-        coef = solve_residues(prob, reps, pf, basis)
-        err = weighted_rel_rms(prob, evaluate(prob, coef, pf, basis))
-        if not exact_rows and precise is None and err > _DIVERGED * last:
-            # the Gram rows lost the sigma system (they square its condition number, which
-            # grows with the order; a cascade of three lines, 2,001 points, 15 phase
-            # turns: single relocations of 71-200 poles went from 2-5 % to 99 %): the
-            # relocation again from the same poles with the exact rows
-            reps, dev = relocate_poles(prob, start[0], stable, True, start[1], start[2])
-            reps = bound_real_poles(reps, prob.pole_bounds)
-            pf, basis, _ = bases(prob, reps)
-            coef = solve_residues(prob, reps, pf, basis)
-            err = weighted_rel_rms(prob, evaluate(prob, coef, pf, basis))
+        step = _step(prob, reps, pf, basis, stable, exact_rows)
+        if not exact_rows and precise is None and step[-1] > _DIVERGED * last:
+            # the Gram rows lost the sigma system (see above): again with the exact rows
+            step = _step(prob, reps, pf, basis, stable, True)
+        reps, pf, basis, coef, dev, err = step
         history.append(IterationRecord(n_poles(reps), err, dev))
         last = err
         if err < best_err:

@@ -147,11 +147,10 @@ def run_fit(
     _, unconstrained_rel, _ = fit_errors(model, data)
     progress("vector fit", 1, 2 if passive else 1)
     pas: PassivityReport | None = None
-    was_enforced = False
+    bound: float | None = None  # what an enforcement is held to, when one ran
     if data.kind in ("Z", "Y", "S") and data.n_out == data.n_in:
         pas = check_passivity(model)
         if passive and not pas.passive:
-            was_enforced = True
             first: tuple[RationalModel, PassivityReport, FitReport] | None = None
             failure = ""
             # S models get a second chance with out-of-band anchors (below): the first
@@ -207,10 +206,9 @@ def run_fit(
         progress("vector fit", 2, 2)
     rms, rel, _ = fit_errors(model, data)
     report = replace(report, rms_error=rms, rel_rms_error=rel)  # errors of the final model
-    if was_enforced:
+    if bound is not None:
         report = _beyond_bound(report, data, unconstrained_rel, dp.floor if dp else 0.0,
-                               enforce_margin if enforce_margin is not None else
-                               enforce_margin_for(unconstrained_rel, dp.floor if dp else 0.0))
+                               bound)
     prms, pmax = point_errors(model, data)
     report = replace(report, point_rel_rms_error=prms, point_rel_max_error=pmax)
     return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
@@ -250,11 +248,11 @@ def enforce_margin_for(fit_error: float, floor: float) -> float:
 
 
 def _beyond_bound(report: FitReport, data: FrequencyData, fit_rel: float, floor: float,
-                  margin: float) -> FitReport:
-    """A note (and a :class:`FitWarning`) when the enforced model ends beyond 1.2x
-    max(fit error, data floor) (and two margins): how far, and whether the data hold a
-    near-lossless reflection that turns the wrong way (:mod:`vfmodel.fitting.foster`)."""
-    bound = max(_ENFORCE_RATIO * max(fit_rel, floor), 2 * margin)
+                  bound: float) -> FitReport:
+    """A note (and a :class:`FitWarning`) when the enforced model ends beyond ``bound``
+    (run_fit's: 1.2x max(fit error, data floor), at least two margins): how far, and
+    whether the data hold a near-lossless reflection that turns the wrong way
+    (:mod:`vfmodel.fitting.foster`)."""
     if report.rel_rms_error <= bound:
         return report
     ratio = report.rel_rms_error / max(fit_rel, floor, 1e-300)
