@@ -30,6 +30,7 @@ No printing; the only file output is :func:`write_case` (atomic directory).
 from __future__ import annotations
 
 import json
+import math
 import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -112,7 +113,9 @@ class ConcealedCase:
     recording channels ``u_B_DE`` and ``i_CM``). ``draw``: the name whose random streams
     make the truth and the noise (default ``name``), so that a case with the extra
     measurements and one without share truth and noise (the extras have a stream of their
-    own; the rest of the data are identical).
+    own; the rest of the data are identical). ``wide``: with ``extra``, the Shaft-Frame
+    spectra reach :data:`WIDE_SHAFT_FRAME_HZ` instead of the spectra's 10 MHz (the band
+    that shows an edge capacitance, :mod:`vfmodel.detective.recommend`).
     """
 
     name: str
@@ -125,6 +128,7 @@ class ConcealedCase:
     truth_sections: int | None = None
     extra: bool = False
     draw: str | None = None
+    wide: bool = False
 
     def __post_init__(self) -> None:
         check_effects(self.decoys, "decoys")
@@ -159,7 +163,9 @@ class ConcealedCase:
         """``base`` with the case's own truth discretisation."""
         return replace(base, n_rungs=self.truth_rungs or base.n_rungs,
                        n_sections=self.truth_sections or base.n_sections,
-                       extra=self.extra or base.extra)
+                       extra=self.extra or base.extra,
+                       shaft_frame_f_hi_hz=WIDE_SHAFT_FRAME_HZ if self.wide
+                       else base.shaft_frame_f_hi_hz)
 
     def entry(self) -> dict[str, object]:
         """The ``cases.json`` entry (without the calibration numbers)."""
@@ -218,6 +224,9 @@ PMSM_CASES: tuple[ConcealedCase, ...] = (
 _BEARING = ("bearing side, truth with 5-rung ladders and 3 winding sections; effect values "
             "drawn with the truth (no calibrated size)")
 _X = "; with the further measurements of CONTRACT 2a (Shaft-Frame, u_B_DE, i_CM)"
+_W = ", the Shaft-Frame spectra to 100 MHz"
+WIDE_SHAFT_FRAME_HZ = 1e8
+"""Upper end of the Shaft-Frame spectra of the wide-band cases (``<name>_w``)."""
 
 
 def _bearing_cases() -> tuple[ConcealedCase, ...]:
@@ -232,11 +241,12 @@ def _bearing_cases() -> tuple[ConcealedCase, ...]:
                               ("pmsm_null_bearing_all", None,
                                ("metallic_contact", "lubricant_two_layer",
                                 "lubricant_dielectric_loss", "hertzian_edge_capacitance"))):
-        for extra in (False, True):
+        for extra, wide in ((False, False), (True, False), (True, True)):
             note = (_BEARING if eff else "null, " + _BEARING.split(", ", 1)[1]) + \
-                (_X if extra else "")
-            out.append(ConcealedCase(name + "_x" * extra, eff, decoys, {}, {}, note,
-                                     truth_rungs=5, truth_sections=3, extra=extra,
+                (_X if extra else "") + (_W if wide else "")
+            out.append(ConcealedCase(name + ("_w" if wide else "_x" * extra), eff, decoys,
+                                     {}, {}, note, truth_rungs=5, truth_sections=3,
+                                     extra=extra, wide=wide,
                                      draw=name))
     return tuple(out)
 
@@ -245,7 +255,8 @@ BEARING_CASES: tuple[ConcealedCase, ...] = _bearing_cases()
 """Bearing-side cases (issue 14): two-layer film, metallic contact, lubricant dielectric
 loss and Hertzian edge capacitance concealed, and two null cases (``pmsm_null_bearing_all``:
 truth and network without any of the four, all of them decoys), each without and with
-(``_x``) the further measurements; a pair shares truth
+(``_x``) the further measurements, and with them with the Shaft-Frame spectra to 100 MHz
+(``_w``); the three share truth
 and noise (:attr:`ConcealedCase.draw`). The committed ones (``data/concealed``) are
 :data:`COMMITTED_BEARING`; the others, and those without extras (the same data less the
 extras), come from ``scripts/make_concealed.py --only pmsm_two_layer --out DIR``."""
@@ -270,6 +281,7 @@ class BenchConfig:
     n_rungs: int = 3
     n_sections: int = 2
     extra: bool = False
+    shaft_frame_f_hi_hz: float = 1e7
 
     @property
     def scope(self) -> ScopeSpec:
@@ -280,6 +292,16 @@ class BenchConfig:
     @property
     def freq_hz(self) -> ArrF:
         return np.logspace(np.log10(self.f_lo_hz), np.log10(self.f_hi_hz), self.n_freq)
+
+    @property
+    def shaft_frame_freq_hz(self) -> ArrF:
+        """Grid of the Shaft-Frame spectra: that of the spectra, continued at the same
+        density up to ``shaft_frame_f_hi_hz``."""
+        if self.shaft_frame_f_hi_hz == self.f_hi_hz:
+            return self.freq_hz
+        per = (self.n_freq - 1) / math.log10(self.f_hi_hz / self.f_lo_hz)
+        n = round(per * math.log10(self.shaft_frame_f_hi_hz / self.f_lo_hz)) + 1
+        return np.logspace(np.log10(self.f_lo_hz), np.log10(self.shaft_frame_f_hi_hz), n)
 
     def spec(self, effects: frozenset[str]) -> NetSpec:
         """Network structure with ``effects`` (``fixture_inductance`` acts on spectra)."""
@@ -405,7 +427,7 @@ def _with_extra(data: CaseData, emis: Mapping[float, Emi]) -> CaseData:
     cfg, eff = data.config, data.case.truth_effects
     r_x = np.random.default_rng(np.random.SeedSequence([*_key(data.case, data.seed,
                                                                 data.unseen), 78]))
-    f = data.freq_hz
+    f = cfg.shaft_frame_freq_hz
     fix = 2j * np.pi * f * data.params["fixture.L"] if "fixture_inductance" in eff else 0.0
     spec = cfg.spec(eff - {"fixture_inductance"})
     sf: dict[float, ArrC] = {}
@@ -446,7 +468,7 @@ def write_case(out: str | Path, data: CaseData,
         at_speed: list[str] = []
         for s, z in data.shaft_frame.items():
             fname = "Shaft-Frame.csv" if s == 0 else f"Shaft-Frame_{round(s):04d}rpm.csv"
-            fd = FrequencyData(data.freq_hz, z[:, None, None], "Z")
+            fd = FrequencyData(data.config.shaft_frame_freq_hz, z[:, None, None], "Z")
             (tmp / "impedance" / fname).write_text(csv_text(fd))
             if s == 0:
                 toml.append(f'"Shaft-Frame" = "impedance/{fname}"')

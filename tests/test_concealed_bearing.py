@@ -108,3 +108,25 @@ def test_extras_carry_the_effect(name: str) -> None:
             cfg.freq_hz[::20], pairs, pairs)
         assert float(np.max(np.abs(np.log(np.diagonal(za, axis1=1, axis2=2)
                                           / np.diagonal(zb, axis1=1, axis2=2))))) < 0.1 * SIG
+
+
+def test_wide_case_is_the_extras_case_with_the_shaft_frame_to_100_mhz() -> None:
+    """``pmsm_edge_w``: the six spectra and the records of ``pmsm_edge`` (same truth and
+    noise); its Shaft-Frame spectra continue the spectra's grid (50 points per decade) to
+    100 MHz and are the truth's within the bench noise (6 sigma of 0.5 %)."""
+    a = generate(BY_NAME["pmsm_edge"])
+    w = generate(BY_NAME["pmsm_edge_w"])
+    for t in a.spectra:
+        np.testing.assert_array_equal(a.spectra[t], w.spectra[t])
+    for s in a.recordings:
+        np.testing.assert_array_equal(a.recordings[s], w.recordings[s])
+    f = w.config.shaft_frame_freq_hz
+    assert f.size == 251 and f[-1] == 1e8
+    np.testing.assert_allclose(f[:201], a.config.freq_hz, rtol=1e-12)
+    assert sorted(w.shaft_frame) == [0.0, 100.0, 300.0]
+    case = BY_NAME["pmsm_edge_w"]
+    cfg = case.config(BenchConfig())
+    for rpm, z in w.shaft_frame.items():
+        ps, st = lubricant_at_speed(w.params, rpm)
+        z0 = shaft_frame_impedance(cfg.spec(case.truth_effects).build(ps, st), f)
+        assert float(np.max(np.abs(z / z0 - 1))) < 6 * BenchConfig().z_noise

@@ -24,7 +24,15 @@ from vfmodel.detective.identifiability import (
     identifiability,
 )
 from vfmodel.detective.problem import Candidate, Channel
-from vfmodel.detective.recommend import Comparison, Net, recommend, separation
+from vfmodel.detective.recommend import (
+    WIDE,
+    WIDE_F_HI_HZ,
+    Comparison,
+    Net,
+    recommend,
+    separation,
+    wide_grid,
+)
 from vfmodel.greybox.assembly import default_params
 from vfmodel.greybox.effects import PAPER_EFFECTS
 from vfmodel.greybox.identify import bearing_state
@@ -133,14 +141,34 @@ def test_recommendation_that_separates_by_construction_ranks_first() -> None:
     cmps = [Comparison(("fixture_inductance",), Net((fx,), p), Net((), p), 1),
             Comparison(("metallic_contact",), Net((mc,), p), Net((), p), 0)]
     recs = recommend(fam, cmps)
-    assert [(r.measurement, r.speed_rpm) for r in recs] == [
-        ("impedance:Shaft-Frame", 0.0), ("impedance:Shaft-Frame", 0.0)]
+    # the fixture inductance, not told on the spectra's band, is also offered the wide band
+    # (to 100 MHz); the contact, told there decisively, is not
+    assert [(r.measurement, r.speed_rpm) for r in recs] == [("impedance:Shaft-Frame", 0.0)] * 3
     assert recs[0].separates == ("metallic_contact",) and recs[0].decisive
-    assert recs[0].expected_delta_chi2 > 1e4
-    assert recs[1].separates == ("fixture_inductance",)
-    assert recs[1].expected_delta_chi2 < 1e-12 and not recs[1].decisive   # rounding only
+    assert recs[0].expected_delta_chi2 > 1e4 and recs[0].band_hz == (1e3, 1e7)
+    fix = sorted(recs[1:], key=lambda r: r.n_points)      # (both 0 up to rounding)
+    assert [r.band_hz for r in fix] == [(1e3, 1e7), (1e3, 1e8)]
+    for r in fix:
+        assert r.separates == ("fixture_inductance",)
+        assert r.expected_delta_chi2 < 1e-12 and not r.decisive   # rounding only
+    # 41 points on 4 decades: the wide band keeps 10 points per decade
+    assert fix[1].n_points == 51 and fix[1].as_json()["band_hz"] == [1e3, 1e8]
     # a measurement the dataset holds is not recommended
-    assert recommend(fam, cmps, have={("impedance:Shaft-Frame", 0.0)}) == []
+    assert recommend(fam, cmps, have={("impedance:Shaft-Frame", 0.0), (WIDE, 0.0)}) == []
+    # the spectra's band held: the wide band is offered for both (the contact is no longer
+    # told there by a recommendation of its own)
+    assert [r.band_hz for r in recommend(fam, cmps, have={("impedance:Shaft-Frame", 0.0)})] \
+        == [(1e3, 1e8)] * 2
+
+
+def test_wide_grid_continues_the_spectra_grid() -> None:
+    """The wide band starts on the spectra's grid and keeps its density up to 100 MHz; a
+    grid that already reaches half of that gets none."""
+    f = np.geomspace(1e3, 1e7, 201)
+    w = wide_grid(f)
+    assert w is not None and w.size == 251 and w[-1] == WIDE_F_HI_HZ
+    np.testing.assert_allclose(w[:201], f, rtol=1e-12)
+    assert wide_grid(np.geomspace(1e3, 6e7, 101)) is None
 
 
 def test_a_refit_worse_than_the_network_without_is_not_assessed() -> None:
@@ -298,3 +326,41 @@ def test_ranked_size_is_the_largest_counted_separation() -> None:
     assert rc._ranked(5.0, 1.0, 9.0, True) == (9.0, "prior")
     assert rc._ranked(5.0, 1.0, None, False, 30.0) == (30.0, "bound")
     assert rc._ranked(5.0, 40.0, None, False, 30.0) == (40.0, "fitted")
+
+
+@dataclass
+class _FreeStub(_Stub):
+    """The stub without the edge capacitance, with the free values of the shaft-to-frame
+    path (machine and bearing)."""
+
+    def spec(self, applied: Sequence[Candidate]) -> NetSpec:
+        base = PAPER_EFFECTS - {"metallic_contact", "hertzian_edge_capacitance"}
+        return NetSpec(frozenset(base) | {c.effect for c in applied})
+
+    def free_names(self, applied: Sequence[Candidate], params: ParamSet) -> tuple[str, ...]:
+        groups = ("lubricant", "bearing", "ball", "shaft", "frame", "airgap")
+        path = [n for n in params.names if n.split(".")[0] in groups and n != "bearing.C_edge"]
+        return (*path, "insulation.C_wr")
+
+
+def test_an_edge_capacitance_is_mimicked_below_the_contact_corner_only() -> None:
+    """An edge capacitance of 1 nF (5 % of the 20 nF film) across the Hertzian contact
+    resistance (0.5 ohm) and the film, the shaft-to-frame path held: the bearing's values
+    of the network without it, refitted, reproduce it up to 1 MHz (far below the corner
+    1 / (2 pi R_h C) = 16 MHz: an RC one-port either way, Foster form; omega R_h C = 0.06
+    at 1 MHz) and miss it up to 100 MHz by many times the detective's acceptance
+    (10 + k ln m, one parameter, 2 x 126 entries: 15.5)."""
+    from vfmodel.detective.recommend import mimicked_on
+
+    f = np.geomspace(1e3, 1e7, 101)
+    fam = _FreeStub((Channel("impedance:U-Frame", f, np.ones(101, complex),
+                             np.full(101, 0.005)),))
+    p = default_params()
+    edge = Candidate("hertzian_edge_capacitance", "bearing.contact")
+    a, b = Net((edge,), p), Net((), p)
+    w = wide_grid(f)
+    assert w is not None
+    assert mimicked_on(fam, a, b, 0.0, np.geomspace(1e3, 1e6, 61), 0.005) < 0.01
+    assert mimicked_on(fam, a, b, 0.0, w, 0.005) > 5 * (10 + math.log(2 * w.size))
+    # no edge: nothing to mimic (the start is the answer, 0 up to rounding)
+    assert mimicked_on(fam, b, b, 0.0, w, 0.005) < 1e-12

@@ -152,9 +152,17 @@ def bearing_windows(family: Family, fit: FitResult, speeds: Iterable[str] | None
 
 
 def _have(ds: Any) -> set[tuple[str, float]]:
-    """Further measurements (CONTRACT section 2a) the dataset already holds."""
-    have = {("impedance:Shaft-Frame", 0.0)} if "Shaft-Frame" in ds.further_impedance else set()
-    have |= {(f"impedance:{s.topology}", float(s.speed_rpm)) for s in ds.impedance_at_speed}
+    """Further measurements (CONTRACT section 2a) the dataset already holds (a shaft-to-frame
+    spectrum reaching half of the wide band's upper end counts as the wide-band one too,
+    :data:`vfmodel.detective.recommend.WIDE`)."""
+    from vfmodel.detective.recommend import WIDE, WIDE_F_HI_HZ
+
+    spectra = [(0.0, "Shaft-Frame", ds.further_impedance["Shaft-Frame"])] \
+        if "Shaft-Frame" in ds.further_impedance else []
+    spectra += [(float(s.speed_rpm), s.topology, s.data) for s in ds.impedance_at_speed]
+    have = {(f"impedance:{t}", rpm) for rpm, t, _ in spectra}
+    have |= {(WIDE, rpm) for rpm, t, fd in spectra
+             if t == "Shaft-Frame" and float(fd.freq_hz[-1]) >= 0.5 * WIDE_F_HI_HZ}
     for r in ds.recordings:
         have |= {(f"channel:{c}", float(r.speed_rpm or 0.0)) for c in r.extra_channels}
     return have

@@ -186,6 +186,13 @@ def _rejected(doc: dict[str, Any]) -> str:
     return "<h2>Rejected candidates</h2>" + table(["effect", "location", "reason"], rows)
 
 
+def _band(band: Any) -> str:
+    """`` (lo – hi)`` of a recommended measurement's band, or nothing."""
+    if not band or band[0] is None or band[1] is None:
+        return ""
+    return f" ({num(band[0], 'Hz')} – {num(band[1], 'Hz')})"
+
+
 def _identifiability(doc: dict[str, Any]) -> str:
     ident = doc.get("identifiability")
     recs = doc.get("recommendations")
@@ -218,7 +225,9 @@ def _identifiability(doc: dict[str, Any]) -> str:
                 out.append(table(["parameter", "class", "std ln p (data)",
                                   "std ln p (data + prior)", "prior std ln p"], prow))
     if recs:
-        rrows = [(E(r["measurement"]), num(r.get("speed_rpm"), "rpm"),
+        rrows = [(E(r["measurement"]) + _band(r.get("band_hz"))
+                  + (" with the standstill spectrum on that band" if r.get("with_standstill")
+                     else ""), num(r.get("speed_rpm"), "rpm"),
                  E(", ".join(r.get("separates", []))),
                  num(r.get("expected_delta_chi2"), "", ["recommendations", str(i),
                                                        "expected_delta_chi2"]),
