@@ -412,6 +412,11 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             cur_mism = locate(family.channels, cur.residual, alpha=alpha)
             if not rounds:      # the first control is the start's polish
                 start = ctrl
+                # the start reported is the polish: where it disagrees beyond the noise
+                # and the first fit did not, its bands are the start's (a finding without
+                # a reported mismatch contradicted "mismatch_found": pmsm_edge_w, --seed 23
+                # --unseen)
+                mism = mism or cur_mism
             elif unpolished:
                 findings[-1] = replace(findings[-1], after=ctrl)   # ... a finding's polish
         unpolished = False
@@ -454,6 +459,7 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             cur_mism = locate(family.channels, cur.residual, alpha=alpha)
             if not findings:
                 start = same
+                mism = mism or cur_mism
             else:                   # the last finding's network, refitted further
                 findings[-1] = replace(findings[-1], after=same)
             rounds.pop()
