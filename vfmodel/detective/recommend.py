@@ -32,11 +32,9 @@ network predicts, :mod:`vfmodel.greybox.assembly`):
   ``1 / (2 pi R_h C)`` (10-30 MHz at ohms and nF) the two form an RC one-port that the
   film without the edge reproduces exactly with other values (Foster form, four values
   each); above it the edge bypasses ``R_h`` and the two part ways. On the concealed case
-  ``pmsm_edge`` (seed 0), the network without the edge, refitted with every machine and
-  lubricant value free to noise-free Shaft-Frame spectra at standstill and 100 rpm,
-  misses them by chi2 1.7 (301 points each, 0.5 % noise) up to 10 MHz and by 172 up to
-  100 MHz (91 of it at 10-30 MHz), against 41 for the null case's truth (the same
-  ladders' discretisation misfit, 5 rungs in the truth, 3 in the network).
+  ``pmsm_edge`` (seed 0) the detective does not see the edge with the spectra to 10 MHz
+  (Delta chi2 -0.1) and finds it with the pair of spectra to 100 MHz below (Delta BIC
+  -115.9; ``docs/notes.md``, session 29).
 - ``channel:u_B_DE``: the drive-end shaft end ``SD`` to frame, as the H1 transfer from the
   three terminal voltages at a recorded speed, on the bins of that speed's bearing term and
   whitened by the covariance of its measured ``u_B`` H1 (:class:`vfmodel.greybox.objective.
@@ -407,7 +405,9 @@ def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]
     of the wide-band shaft-to-frame measurement (:data:`WIDE`), None when not offered."""
     bts = family.bearing_terms() if hasattr(family, "bearing_terms") else ()
     speeds = [float(p.speed_rpm) for p in getattr(family, "preps", ())]
-    imp_noise = f"ln Z with sigma {sig:.3g} (Re and Im) on {freq.size} points"
+    def imp_noise(f: ArrF) -> str:
+        return f"ln Z with sigma {sig:.3g} (Re and Im) on {f.size} points"
+
     rec_noise = "H1 from the terminal voltages, whitened by the covariance of the measured " \
                 "u_B H1 at {}"
     out: dict[tuple[str, float], tuple[float, int, int, str]] = {}
@@ -415,12 +415,12 @@ def _separations(family: Any, a: Net, b: Net, have: Collection[tuple[str, float]
         if ("impedance:Shaft-Frame", rpm) not in have:
             d = separation(np.log(_shaft_frame(family, a, rpm, freq)
                                   / _shaft_frame(family, b, rpm, freq)), sig)
-            out[("impedance:Shaft-Frame", rpm)] = (d, freq.size, 2 * freq.size, imp_noise)
+            out[("impedance:Shaft-Frame", rpm)] = (d, freq.size, 2 * freq.size,
+                                                   imp_noise(freq))
         if wide is not None and (WIDE, rpm) not in have:
             d = separation(np.log(_shaft_frame(family, a, rpm, wide)
                                   / _shaft_frame(family, b, rpm, wide)), sig)
-            out[(WIDE, rpm)] = (d, wide.size, 2 * wide.size,
-                                f"ln Z with sigma {sig:.3g} (Re and Im) on {wide.size} points")
+            out[(WIDE, rpm)] = (d, wide.size, 2 * wide.size, imp_noise(wide))
     for bt, rpm in zip(bts, speeds, strict=True):
         f = bt.freq_hz
         ha, hb = _transfers(family, a, rpm, f), _transfers(family, b, rpm, f)
@@ -531,6 +531,7 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
         nets = [cmp.with_] + ([cmp.with_prior] if cmp.with_prior is not None else [])
         bound: tuple[float, Net, _Refit] | None = None
         open_ = False
+        pres: _Present | None = None
         for (meas, rpm), (d, n, m, noise) in fitted.items():
             after: list[float | None] = [None, None, None]
             moves: list[tuple[tuple[str, float], ...]] = [(), (), ()]
@@ -583,23 +584,33 @@ def recommend(family: Any, cmps: Sequence[Comparison], *,
                                         else bound[0], after[2], absorbed, fixed_ranked,
                                         _acceptance(cmp.n_params, m),
                                         (float(fm[0]), float(fm[-1])) if sf else None)
-        if WIDE in best and best.get(SHAFT_FRAME_MEAS) is not None \
-                and best[SHAFT_FRAME_MEAS].decisive:
-            # the wide band only where the spectra's band does not tell the effect: an
-            # analyser to 100 MHz with its fixture compensated is the harder measurement,
-            # and the grey-box network was identified below 10 MHz
-            del best[WIDE]
+        _drop_wide(best)
         if cmp.with_upper is not None and prior_sigma is not None \
                 and not any(r.decisive for r in best.values()):
-            _at_upper(family, cmp, fitted, best, freq, wide, sig, have)
+            if pres is None:
+                pres = _present(family, cmp.without, prior_sigma)
+            # the present data's rows of its Jacobian (the prior rows below them left out:
+            # the detective refits by least squares)
+            _at_upper(family, cmp, fitted, best, freq, wide, sig,
+                      (pres.names, pres.jac[: pres.rb.size]), have)
         out += best.values()
     return sorted(out, key=lambda r: -r.rank_value)
+
+
+def _drop_wide(recs: dict[str, Recommendation]) -> None:
+    """The wide band only where the spectra's band does not tell the effect: an analyser
+    to 100 MHz with its fixture compensated is the harder measurement, and the grey-box
+    network was identified below 10 MHz."""
+    narrow = recs.get(SHAFT_FRAME_MEAS)
+    if narrow is not None and narrow.decisive:
+        recs.pop(WIDE, None)
 
 
 def _at_upper(family: Any, cmp: Comparison, fitted: Mapping[tuple[str, float],
                                                              tuple[float, int, int, str]],
               best: dict[str, Recommendation], freq: ArrF, wide: ArrF | None,
-              sig: float, have: Collection[tuple[str, float]] = ()) -> None:
+              sig: float, hold: tuple[tuple[str, ...], ArrF],
+              have: Collection[tuple[str, float]] = ()) -> None:
     """For an effect that no measurement tells at its fitted, typical or bounded size: the
     shaft-to-frame measurements at the upper end of its physical prior
     (``cmp.with_upper``, the undetermined parameters at ``median gsd^3``), each judged by
@@ -610,13 +621,9 @@ def _at_upper(family: Any, cmp: Comparison, fitted: Mapping[tuple[str, float],
     1.07 nF.)"""
     assert cmp.with_upper is not None
     found: dict[str, Recommendation] = {}
-    hold: tuple[tuple[str, ...], ArrF] | None = None
     for (meas, rpm), (d, n, m, noise) in fitted.items():
         if meas not in (SHAFT_FRAME_MEAS, WIDE):
             continue
-        if hold is None:
-            pres = _present(family, cmp.without, {})
-            hold = (pres.names, pres.jac[: pres.rb.size])
         fm = wide if meas == WIDE and wide is not None else freq
         # the wide band at speed with the standstill spectrum on that band (unless held):
         # with the contact closed it pins the shaft-to-frame path's inductances, which
@@ -637,8 +644,7 @@ def _at_upper(family: Any, cmp: Comparison, fitted: Mapping[tuple[str, float],
             acceptance=_acceptance(cmp.n_params, m * (2 if pair else 1)),
             band_hz=(float(fm[0]), float(fm[-1])), after_refit_at_upper=sep,
             with_standstill=pair)
-    if found.get(SHAFT_FRAME_MEAS) is not None and found[SHAFT_FRAME_MEAS].decisive:
-        found.pop(WIDE, None)
+    _drop_wide(found)
     for k, r in found.items():
         if r.decisive and (k not in best or best[k].rank_value < r.rank_value):
             best[k] = r
