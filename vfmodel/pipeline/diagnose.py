@@ -114,6 +114,12 @@ def diagnosis_json(family: Family, d: Diagnosis) -> dict[str, Any]:
                         "number of residuals minus fitted parameters",
             "significance": "Bonferroni-corrected p-value of the band as a one-sided "
                             "Gaussian z score",
+            "statistic": "the test that shows the band: 'bias' or 'excess' of the "
+                         "residual in a window of points; 'candidate' when no window does "
+                         "and a candidate's chi-square gain is significant (likelihood "
+                         "ratio, Bonferroni over the candidates tried) and repeated on the "
+                         "held-out points (the band is the channel that holds most of the "
+                         "gain)",
             "impedance_mape_pct": "mean over spectra of the mean |(|Z_model|-|Z_meas|)/"
                                   "|Z_meas||*100",
             "chi2_per_channel": "per channel, the sum of its squared noise-normalised "
