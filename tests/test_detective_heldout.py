@@ -12,7 +12,7 @@ import pytest
 
 from vfmodel.detective.diagnose import (
     _HELDOUT_Z,
-    candidate_p,
+    candidate_log_p,
     heldout_shortfall,
     not_repeated,
 )
@@ -80,15 +80,23 @@ def test_shortfall_of_the_measured_decoy_and_of_a_genuine_finding() -> None:
 def test_candidate_gain_as_a_mismatch_test_keeps_its_false_alarm_rate(alpha: float) -> None:
     # nothing missing (strength 0): the candidate's parameter fits noise, its in-sample
     # gain is chi-square with 1 degree of freedom (Wilks); called a mismatch
-    # (candidate_p < alpha, one candidate) alpha of the time: measured 4.6 % / 0.9 %,
+    # (p < alpha, one candidate) alpha of the time: measured 4.6 % / 0.9 %,
     # asserted within 3 binomial standard deviations
     in_sample, _ = _gains(0.0, n=400, draws=4000, seed=23)
-    rate = np.mean([candidate_p(d, 1, 1) < alpha for d in in_sample])
+    rate = np.mean([candidate_log_p(d, 1, 1) < np.log(alpha) for d in in_sample])
     assert rate <= alpha + 3 * np.sqrt(alpha * (1 - alpha) / in_sample.size)
     # Bonferroni: the p-value scales with the candidates tried, at most 1; no gain, p = 1
-    assert candidate_p(-20.0, 1, 4) == pytest.approx(4 * candidate_p(-20.0, 1, 1), rel=1e-12)
-    assert candidate_p(-0.5, 2, 10) == 1.0
-    assert candidate_p(3.0, 2, 1) == 1.0
+    assert candidate_log_p(-20.0, 1, 4) == pytest.approx(
+        np.log(4) + candidate_log_p(-20.0, 1, 1), rel=1e-12)
+    assert candidate_log_p(-0.5, 2, 10) == 0.0
+    assert candidate_log_p(3.0, 2, 1) == 0.0
+    # far in the tail, where scipy's chi2.logsf underflows to -inf (a significance of
+    # inf is not JSON): chi2(1) survival is 2 Phi(-sqrt(x)), exact by log_ndtr
+    from scipy.special import log_ndtr
+
+    for x in (100.0, 2000.0, 1e5):
+        assert candidate_log_p(-x, 1, 1) == pytest.approx(
+            np.log(2) + log_ndtr(-np.sqrt(x)), rel=1e-3)
 
 
 def test_candidate_gain_of_a_genuine_effect_is_seen_as_a_mismatch() -> None:
@@ -96,4 +104,4 @@ def test_candidate_gain_of_a_genuine_effect_is_seen_as_a_mismatch() -> None:
     # over 4 candidates is chi2(1) 15.1: called a mismatch in every draw (asserted >= 99 %)
     in_sample, _ = _gains(1.8, n=400, draws=2000, seed=29)
     assert -np.mean(in_sample) == pytest.approx(101, rel=0.05)
-    assert np.mean([candidate_p(d, 1, 4) < 1e-3 for d in in_sample]) >= 0.99
+    assert np.mean([candidate_log_p(d, 1, 4) < np.log(1e-3) for d in in_sample]) >= 0.99

@@ -266,18 +266,20 @@ def test_case_list_covers_the_issue() -> None:
     assert Path(CASES / FAST_CONCEALED).is_dir()
 
 
-@pytest.mark.parametrize(("f_hi", "n", "kept"), [(1e7, 201, 101), (1e8, 251, 126),
-                                                 (1e7, 101, 101)])
-def test_shaft_frame_spectra_keep_the_density_of_the_six(f_hi: float, n: int,
+@pytest.mark.parametrize(("f_hi", "n", "six", "kept"),
+                         [(1e7, 201, 4.0, 101), (1e8, 251, 4.0, 126), (1e7, 101, 4.0, 101),
+                          (1e8, 251, 5.0, 84), (1e3, 1, 4.0, 1)])
+def test_shaft_frame_spectra_keep_the_density_of_the_six(f_hi: float, n: int, six: float,
                                                          kept: int) -> None:
     # fit_points (101) are meant for 4 decades (the six spectra, 1 kHz-10 MHz): a
     # 1 kHz-100 MHz Shaft-Frame spectrum of 251 points keeps 126 (every second point,
-    # 25 per decade), not 84 (every third, 17 per decade)
+    # 25 per decade), not 84 (every third, 17 per decade); with six spectra spanning 5
+    # decades (20 per decade) 101 are asked, every third point kept; one point stays one
     from vfmodel.core.frequency_data import FrequencyData
     from vfmodel.detective.pmsm import _span_points
     from vfmodel.greybox.identify import thin_spectra
 
     f = np.geomspace(1e3, f_hi, n)
     fd = FrequencyData(f, np.ones(n, dtype=complex), kind="Z")
-    thin = thin_spectra({"Shaft-Frame": fd}, _span_points(fd, 101))["Shaft-Frame"]
+    thin = thin_spectra({"Shaft-Frame": fd}, _span_points(fd, 101, six))["Shaft-Frame"]
     assert thin.n_freq == kept

@@ -42,6 +42,7 @@ doi:10.1080/01621459.1995.10476572 (BIC difference > 10: very strong evidence)
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -52,7 +53,7 @@ from scipy import stats
 from vfmodel.core.parallel import parallel_map
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.detective.fit import FitResult, evaluate, refit
-from vfmodel.detective.locate import Mismatch, locate
+from vfmodel.detective.locate import Mismatch, locate, z_of_log_p
 from vfmodel.detective.poles import PoleComparison, compare_poles
 from vfmodel.detective.problem import Candidate, Family, channel_slices
 from vfmodel.greybox.params import ParamSet
@@ -268,15 +269,20 @@ def _repeats(t: Trial, share: float) -> bool:
                                  t.candidate.n_params) is None)
 
 
-def candidate_p(delta_chi2: float, n_params: int, n_cands: int) -> float:
-    """Family-wise p-value of a candidate's in-sample chi-square gain under "the base
-    explains the data": the likelihood-ratio statistic ``-delta_chi2`` against chi-square
-    with ``max(k, 1)`` degrees of freedom (Wilks 1938; exact for a linear model with unit
-    white noise, ``tests/test_detective_heldout.py``), times ``n_cands`` (Bonferroni over
-    the candidates tried), at most 1."""
+def candidate_log_p(delta_chi2: float, n_params: int, n_cands: int) -> float:
+    """Log of the family-wise p-value of a candidate's in-sample chi-square gain under "the
+    base explains the data": the likelihood-ratio statistic ``-delta_chi2`` against
+    chi-square with ``max(k, 1)`` degrees of freedom (Wilks 1938; exact for a linear model
+    with unit white noise, ``tests/test_detective_heldout.py``), times ``n_cands``
+    (Bonferroni over the candidates tried), at most 1 (log 0)."""
     if not delta_chi2 < 0:
-        return 1.0
-    return min(1.0, float(stats.chi2.sf(-delta_chi2, max(n_params, 1))) * max(n_cands, 1))
+        return 0.0
+    x, s = -delta_chi2, 0.5 * max(n_params, 1)
+    lp = float(stats.chi2.logsf(x, 2 * s))
+    if not np.isfinite(lp):  # scipy underflows (x ~ 1500): the leading term of the
+        # asymptotic series of Gamma(s, x/2) / Gamma(s), relative error (s-1)/(x/2)
+        lp = (s - 1.0) * math.log(x / 2) - x / 2 - math.lgamma(s)
+    return min(lp + float(np.log(max(n_cands, 1))), 0.0)
 
 
 def shown_mismatch(family: Family, base: FitResult, t: Trial, alpha: float, n_cands: int,
@@ -286,29 +292,28 @@ def shown_mismatch(family: Family, base: FitResult, t: Trial, alpha: float, n_ca
     A located band (:func:`vfmodel.detective.locate.locate`) is an omnibus test: any shape,
     Bonferroni over ~1e4 windows. A candidate is a targeted test of one shape: its gain is
     a mismatch when the likelihood ratio is significant at the same family-wise ``alpha``
-    over the candidates tried (:func:`candidate_p`) and its held-out points repeat it
+    over the candidates tried (:func:`candidate_log_p`) and its held-out points repeat it
     (:func:`_repeats`: the gain is not the even points' structure error). Returned as a
     mismatch of the channel that holds most of the gain (its whole band, statistic
     ``candidate``), None otherwise. A candidate whose gain is only its fewer parameters
     (the metallic contact replacing the standstill film, Delta chi2 ~ 0) shows none.
 
     Why: on the 100 MHz Shaft-Frame spectra of ``pmsm_edge`` (``--seed 7 --unseen``, the
-    spectra at the six spectra's density) the start's misfit, spread over the band above
-    the edge's corner, stayed below every window's threshold, while the edge capacitance
+    spectra at the six spectra's density) the start's misfit, spread over the top decade
+    of the 100 rpm spectrum, stayed below every window's threshold, while the edge capacitance
     gained Delta chi2 -77.8 (Delta BIC -62.4) and its held-out points repeated -68.0 of it;
     on ``--seed 23 --unseen`` -33.5 (-18.1), held-out -7.8."""
-    if not np.isfinite(t.heldout_delta_chi2) or not _repeats(t, share):
+    if not _repeats(t, share):      # also False when the held-out score is missing (nan)
         return None
-    p = candidate_p(t.delta_chi2, t.candidate.n_params, n_cands)
-    if p >= alpha:
+    lp = candidate_log_p(t.delta_chi2, t.candidate.n_params, n_cands)
+    if lp >= np.log(alpha):
         return None
     gain = [float(t.fit.residual[sl] @ t.fit.residual[sl] - base.residual[sl] @ base.residual[sl])
             for sl in channel_slices(family.channels)]
     i = int(np.argmin(gain))
     c = family.channels[i]
-    z = float(stats.norm.isf(p)) if p > 0 else float(np.sqrt(-t.delta_chi2))
-    return Mismatch(c.where, (float(c.freq_hz[0]), float(c.freq_hz[-1])), z, p, "candidate",
-                    0, c.n - 1)
+    return Mismatch(c.where, (float(c.freq_hz[0]), float(c.freq_hz[-1])), z_of_log_p(lp),
+                    float(np.exp(lp)), "candidate", 0, c.n - 1)
 
 
 def _reason(t: Trial, bic_min: float, mismatch_left: bool, share: float) -> str:
@@ -485,11 +490,12 @@ def diagnose(family: Family, *, bic_min: float = 10.0, ambiguity: float = 10.0,
             if not left:
                 # no band shows a mismatch: a supported candidate may (shown_mismatch);
                 # the best of them is the mismatch left
-                shown = [mm for t in sorted(trials, key=lambda t: t.delta_bic)
-                         if t.delta_bic < -bic_min and (mm := shown_mismatch(
-                             family, cur, t, alpha, len(trials), share)) is not None]
-                if shown:
-                    cur_mism, left = (shown[0],), True
+                shown = next((mm for t in sorted(supported, key=lambda t: t.delta_bic)
+                              if (mm := shown_mismatch(family, cur, scored[t.candidate.key],
+                                                       alpha, len(trials), share))
+                              is not None), None)
+                if shown is not None:
+                    cur_mism, left = (shown,), True
                     if not findings:
                         mism = mism or cur_mism
         open_ = left and room

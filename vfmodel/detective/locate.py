@@ -34,7 +34,7 @@ from scipy import stats
 
 from vfmodel.detective.problem import Channel, channel_slices
 
-__all__ = ["Mismatch", "locate", "n_tests"]
+__all__ = ["Mismatch", "locate", "n_tests", "z_of_log_p"]
 
 ArrF = NDArray[np.float64]
 WINDOWS = (4, 8, 16, 32, 64)
@@ -56,6 +56,13 @@ class Mismatch:
     statistic: str
     i0: int
     i1: int
+
+
+def z_of_log_p(log_p: float) -> float:
+    """A (corrected) p-value given by its log as a one-sided Gaussian z score; below
+    exp(-700) the asymptote ``sqrt(-2 ln p)``."""
+    lp = min(log_p, 0.0)
+    return float(stats.norm.isf(np.exp(lp))) if lp > -700 else float(np.sqrt(-2 * lp))
 
 
 def _windows(n: int, windows: Sequence[int]) -> list[int]:
@@ -104,8 +111,7 @@ def locate(channels: Sequence[Channel], residual: ArrF, *, alpha: float = 1e-3,
                 a0, a1, alp, aname = h0, h1, hlp, hname
         bands.append((a0, a1, alp, aname))
         for i0, i1, lp, name in bands:
-            lp = min(lp, 0.0)
-            z = float(stats.norm.isf(np.exp(lp))) if lp > -700 else float(np.sqrt(-2 * lp))
+            z = z_of_log_p(lp)
             out.append(Mismatch(c.where, (float(c.freq_hz[i0]), float(c.freq_hz[i1])),
                                 z, float(np.exp(lp)), name, i0, i1))
     out.sort(key=lambda mm: -mm.significance)

@@ -499,22 +499,26 @@ def _with_speed_copies(params: ParamSet, speeds: Iterable[float]) -> ParamSet:
     return params.with_specs(extra)
 
 
-_DECADES = 4.0  # the span of the spectra ``fit_points`` is meant for (1 kHz-10 MHz)
+_DECADES = 4.0  # span of the six spectra assumed when a dataset has none (1 kHz-10 MHz)
 
 
-def _span_points(fd: FrequencyData, fit_points: int) -> int:
-    """Points kept of a Shaft-Frame spectrum: ``fit_points`` per :data:`_DECADES` decades,
-    so that a wider band keeps the density of the six spectra (a 1 kHz-100 MHz spectrum of
-    251 points kept 84 of them, 17 per decade against 25: the networks' features above
-    10 MHz fell between every second point, and refits on the even points were free to move
-    them, which the held-out test then scored)."""
+def _decades(fd: FrequencyData) -> float:
+    """Decades a spectrum spans (0 for fewer than two positive frequencies)."""
     f = fd.freq_hz[fd.freq_hz > 0]
-    decades = float(np.log10(f[-1] / f[0])) if f.size > 1 else _DECADES
-    return max(fit_points, int(np.ceil(fit_points * decades / _DECADES)))
+    return max(float(np.log10(f[-1] / f[0])), 0.0) if f.size > 1 else 0.0
 
 
-def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Progress
-           ) -> list[tuple[PortTerm, str, ArrC | None]]:
+def _span_points(fd: FrequencyData, fit_points: int, decades: float = _DECADES) -> int:
+    """Points kept of a Shaft-Frame spectrum: ``fit_points`` per ``decades`` (the six
+    spectra's span), so that a wider band keeps the density of the six spectra (a
+    1 kHz-100 MHz spectrum of 251 points kept 84 of them, 17 per decade against 25: the
+    networks' features above 10 MHz fell between every second point, and refits on the
+    even points were free to move them, which the held-out test then scored)."""
+    return max(fit_points, int(np.ceil(fit_points * _decades(fd) / max(decades, 1e-12))))
+
+
+def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Progress,
+           decades: float = _DECADES) -> list[tuple[PortTerm, str, ArrC | None]]:
     """Shaft-to-frame spectra of the dataset (CONTRACT section 2a) as detective terms, with
     their noise method and black-box poles: the standstill one, and those at the recorded
     speeds (another speed has no per-speed lubricant values to predict it with)."""
@@ -529,7 +533,8 @@ def _ports(dataset: Dataset, fit_points: int, speeds: set[float], progress: Prog
         progress("noise of the shaft-to-frame spectra", k, len(spectra))
         full = fd.to_kind("Z")
         nz = spectrum_noise(full.freq_hz, full.values[:, 0, 0])
-        thin = thin_spectra({SHAFT_FRAME: full}, _span_points(full, fit_points))[SHAFT_FRAME]
+        thin = thin_spectra({SHAFT_FRAME: full},
+                            _span_points(full, fit_points, decades))[SHAFT_FRAME]
         where = f"impedance:{SHAFT_FRAME}" + (speed_tag(rpm) if rpm > 0 else "")
         out.append((PortTerm(where, rpm, thin.freq_hz, thin.values[:, 0, 0], nz.sigma),
                     nz.method, None if nz.blackbox is None else nz.blackbox.poles))
@@ -617,7 +622,8 @@ def pmsm_family(dataset: Dataset, without: Iterable[str] = (), *, fit_points: in
     _, bts = fam._terms((), start)
     for p, bt in zip(preps, bts, strict=True):
         chans += term_channels(bt, [f"bearing:{p.speed_rpm:g}rpm:{ph}" for ph in PHASES])
-    ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress)
+    span = max((_decades(fd) for fd in dataset.impedance.values()), default=0.0) or _DECADES
+    ports = _ports(dataset, fit_points, {p.speed_rpm for p in preps}, progress, span)
     chans += [Channel(t.where, t.freq_hz, t.z_meas, np.full(t.freq_hz.size, t.sigma), m, bb)
               for t, m, bb in ports]
     for k, rt in enumerate(records):

@@ -649,7 +649,8 @@ def _at_upper(family: Any, cmp: Comparison, fitted: Mapping[tuple[str, float],
     # kept decisive or not: when nothing is decisive the best forecast at the upper end
     # still ranks the measurements (pmsm_edge, --seed 7 --unseen: the pair at 100 rpm,
     # 10.6 against an acceptance of 22.4 with the fitted, prior-only contact resistance
-    # 0.35 ohm; with the truth's 0.51 ohm, 39; measured, the pair gave Delta chi2 -77.8)
+    # 0.35 ohm; with 0.5 ohm, near the truth's 0.51, 39; measured, the pair gave Delta
+    # chi2 -77.8)
     for k, r in found.items():
         if k not in best or best[k].rank_value < r.rank_value:
             best[k] = r
