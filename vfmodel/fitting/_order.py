@@ -28,6 +28,7 @@ fitting", IEEE Trans. Power Delivery 14(3), 1999. doi:10.1109/61.772353
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from math import comb
 
@@ -86,6 +87,12 @@ class AutoResult:
     reason: str
     noise_floor: float | None  # None: not measurable (see NOISE_UNRESOLVED)
     hit_max: bool = False  # the growth stopped at the maximum order
+    prob: core.Problem | None = None  # the problem of ``coef`` when ``finish`` changed it
+
+
+# a last relocation of the chosen poles in another problem (the lighter out-of-band
+# control of an S fit): the problem and the relocation, or None when not kept
+Finish = Callable[[core.Coefficients], "tuple[core.Problem, core.FixedOrderResult] | None"]
 
 
 def estimate_noise(prob: core.Problem) -> float:
@@ -304,6 +311,7 @@ def auto_order(
     target: float | None = None,
     margin: float = NOISE_MARGIN,
     min_order: int = 0,
+    finish: Finish | None = None,
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
@@ -318,6 +326,10 @@ def auto_order(
     while they stay within it. The model kept is relocated to convergence unless it came
     from a converged trial. With ``target`` the floor is ``target / 1.25`` instead of the
     noise estimate (the order stops at the requested error).
+
+    ``finish`` (an S fit's lighter out-of-band control) relocates the chosen poles once
+    more in its own problem; when it keeps that relocation, the final relocation in
+    ``prob`` is not made (it would be undone: 1-9 relocations of a small noise-free fit).
     """
     noise = estimate_noise(prob) if target is None else target / margin
     # no measurable noise floor: the order grows until adding poles stops paying
@@ -467,7 +479,13 @@ def auto_order(
             best_err = trial.weighted_rel_rms
             limit = margin * best_err
         (coef, cost), converged = _backward_prune(prob, trial.coef, limit), trial.converged
-    if not converged:  # no lower order was accepted: relocate the pruned model
+    took = None if finish is None else finish(coef)
+    if took is not None:
+        prob_out, last = took
+        coef, converged = last.coef, last.converged
+        n_it += last.n_iterations
+        history.extend(last.history)
+    elif not converged:  # no lower order was accepted: relocate the pruned model
         now = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
         final = _relocate.iterate(
             prob,
@@ -484,7 +502,7 @@ def auto_order(
         converged = final.converged
         if final.weighted_rel_rms <= now:
             coef = final.coef
-    err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
+    err = core.weighted_rel_rms(prob, core.evaluate(prob, coef))  # the same weights
     n = core.n_poles(coef.reps)
     if why == "noise" and target is not None:
         reason = f"order {n}: weighted relative RMS error {err:.3g} within the target {target:.3g}"
@@ -521,4 +539,5 @@ def auto_order(
         reason += ("; the noise floor could not be estimated: adjacent samples differ as "
                    "much as the data (a response sampled too coarsely for its phase)")
     return AutoResult(coef, tuple(history), n_it, converged, reason,
-                      None if unresolved else noise, hit_max=why == "max")
+                      None if unresolved else noise, hit_max=why == "max",
+                      prob=None if took is None else prob_out)

@@ -54,15 +54,15 @@ def _gain(prob: core.Problem, coef: core.Coefficients, n: int) -> float:
 def lighter(
     prob: core.Problem, coef: core.Coefficients, n_ports: int, *,
     max_iterations: int, tol: float, stable: bool,
-) -> tuple[core.Problem, core.Coefficients]:
-    """The problem and coefficients with the lighter out-of-band control (module doc),
-    or the given ones."""
+) -> tuple[core.Problem, core.FixedOrderResult] | None:
+    """The problem with the lighter out-of-band control (module doc) and the relocation
+    at ``coef``'s order in it, or None when it is not tried or not kept."""
     if (prob.anchors is None and prob.ridge == 0.0) or coef.c.shape[0] != n_ports**2 \
             or coef.c.shape[1] == 0:
-        return prob, coef
+        return None
     err0 = core.weighted_rel_rms(prob, core.evaluate(prob, coef))
     if not err0 <= _TRY_BELOW:
-        return prob, coef
+        return None
     data = prob.h.reshape(-1, n_ports, n_ports)
     top = float(np.max(np.linalg.svd(data, compute_uv=False)))
     limit = max(_gain(prob, coef, n_ports), top, 1.0) + _SLACK
@@ -73,7 +73,7 @@ def lighter(
     # kept only when it reaches err0 / _GAIN: given up once it cannot (iterate's target)
     res = _relocate.iterate(trial, coef.reps, max_iterations=max_iterations, tol=tol,
                             stable=stable, target=err0 / _GAIN)
-    err = core.weighted_rel_rms(trial, core.evaluate(trial, res.coef))
+    err = res.weighted_rel_rms
     if np.isfinite(err) and err * _GAIN <= err0 and _gain(trial, res.coef, n_ports) <= limit:
-        return trial, res.coef
-    return prob, coef
+        return trial, res
+    return None

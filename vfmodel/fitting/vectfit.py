@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import warnings
 from typing import TYPE_CHECKING, Any, Literal
@@ -233,6 +234,13 @@ def vector_fit(
         anchors=(_anchors(fd, h, w, omega_scale, out_of_band_weight)
                  if fd.kind == "S" else None),
     )
+    # S data: once the poles are found, a last relocation with the lighter out-of-band
+    # control (vfmodel.fitting._out_of_band)
+    lighter: _order.Finish | None = None
+    if fd.kind == "S" and out_of_band_weight is None:
+        lighter = functools.partial(_out_of_band.lighter, prob, n_ports=fd.n_out,
+                                    max_iterations=max_iterations, tol=tol,
+                                    stable=enforce_stability)
     positive = omega[omega > 0] / omega_scale
     w_lo, w_hi = float(positive[0]), 1.0
     if order == "auto":
@@ -260,9 +268,11 @@ def vector_fit(
             # a response whose phase turns many times needs about two poles per turn:
             # no plateau is declared below that order
             min_order=min(cap, int(2 * _phase_turns(fd)) + 4),
+            finish=lighter,
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise, hit_max = auto.reason, auto.noise_floor, auto.hit_max
+        prob = auto.prob or prob
     else:
         if isinstance(order, bool) or not isinstance(order, int | np.integer):
             raise InputError("order must be a positive integer or 'auto'", found=repr(order))
@@ -287,10 +297,12 @@ def vector_fit(
             prob, reps, max_iterations=max_iterations, tol=tol, stable=enforce_stability
         )
         coef, history, n_it, converged = res.coef, res.history, res.n_iterations, res.converged
+        took = None if lighter is None else lighter(coef)
+        if took is not None:  # the lighter control's relocation at this order is kept
+            prob, last = took
+            coef, converged = last.coef, last.converged
+            history, n_it = (*history, *last.history), n_it + last.n_iterations
         reason, noise = f"order {n} given", None
-    if fd.kind == "S" and out_of_band_weight is None:  # poles found: lighter control
-        prob, coef = _out_of_band.lighter(prob, coef, fd.n_out, max_iterations=max_iterations,
-                                          tol=tol, stable=enforce_stability)
     model = _to_model(coef, fd, omega_scale, fit_d=bool(fit_d), fit_e=bool(fit_e))
     if tau > 0:
         fd, model = data_fd, RationalModel(model.poles, model.residues, model.d, model.e,
