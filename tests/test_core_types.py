@@ -84,6 +84,27 @@ def test_rational_model_requires_conjugate_pairs() -> None:
         RationalModel(np.array([-1 + 2j, -1 - 2j]), np.array([1 + 1j, 2 - 1j]))
 
 
+def test_rational_model_canonical_input_same_as_reordered() -> None:
+    # a fit's model arrives in canonical order and skips the pair search; the result must
+    # be the one the search gives for the same poles listed in any order (conjugates to
+    # within 1e-12 made exact), and a non-conjugate residue must still be refused
+    rng = np.random.default_rng(5)
+    p = np.array([-3.0, -0.2 + 4j, -0.2 - 4j + 1e-12, -1 + 9j, -1 - 9j])
+    r = rng.normal(size=(5, 2, 2)) + 1j * rng.normal(size=(5, 2, 2))
+    r[0] = r[0].real
+    r[2], r[4] = np.conj(r[1]), np.conj(r[3])
+    canonical = RationalModel(p, r, kind="H")
+    perm = np.array([2, 0, 4, 1, 3])  # the upper poles keep their relative order
+    searched = RationalModel(p[perm], r[perm], kind="H")
+    assert np.array_equal(canonical.poles, searched.poles)
+    assert np.array_equal(canonical.residues, searched.residues)
+    assert canonical.poles[2] == np.conj(canonical.poles[1])  # made exact
+    bad = r.copy()
+    bad[2] = bad[2] + 1e-3
+    with pytest.raises(InputError, match="not conjugate"):
+        RationalModel(p, bad, kind="H")
+
+
 def test_rational_model_json_round_trip() -> None:
     m = RationalModel(np.array([-2.0, -1 + 5j, -1 - 5j]), np.array([1.0, 2 + 1j, 2 - 1j]),
                       d=[[0.5]], e=[[1e-9]], kind="Z")  # type: ignore[arg-type]

@@ -34,6 +34,9 @@ def _canonical_order(
     """
     scale = np.maximum(np.abs(poles), 1e-300)
     is_real = np.abs(poles.imag) <= _PAIR_TOL * scale
+    fast = _already_canonical(poles, residues, scale, is_real)
+    if fast is not None:
+        return fast
     order: list[int] = [int(i) for i in np.flatnonzero(is_real)]
     upper = [int(i) for i in np.flatnonzero(~is_real & (poles.imag > 0))]
     lower = {int(i) for i in np.flatnonzero(~is_real & (poles.imag < 0))}
@@ -72,6 +75,34 @@ def _canonical_order(
     r[: len(order)] = r[: len(order)].real
     # make the pairs exactly conjugate
     k = len(order)
+    p[k + 1 :: 2] = np.conj(p[k::2])
+    r[k + 1 :: 2] = np.conj(r[k::2])
+    return p, r
+
+
+def _already_canonical(
+    poles: NDArray[np.complex128], residues: NDArray[np.complex128],
+    scale: NDArray[np.float64], is_real: NDArray[np.bool_],
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]] | None:
+    """What :func:`_canonical_order` returns, without its search, for poles already in
+    that order (a fit's model: the real poles, then each upper pole followed by its
+    conjugate, within its tolerances); None otherwise."""
+    k = int(np.count_nonzero(is_real))
+    up, lo = poles[k::2], poles[k + 1 :: 2]
+    if not (bool(np.all(is_real[:k])) and up.size == lo.size and bool(np.all(up.imag > 0))
+            and bool(np.all(np.abs(lo - up.conj()) <= 1e-6 * scale[k::2]))):
+        return None
+    if up.size:
+        r_up, r_lo = residues[k::2], residues[k + 1 :: 2]
+        flat = np.abs(r_up).reshape(up.size, -1)
+        rscale = np.maximum(np.max(flat, axis=1), 1e-300)
+        miss = np.abs(r_lo - r_up.conj()).reshape(up.size, -1)
+        if not bool(np.all(np.max(miss, axis=1) <= 1e-6 * rscale)):
+            return None  # the general path names the pair
+    p = poles.copy()
+    r = residues.copy()
+    p[:k] = p[:k].real
+    r[:k] = r[:k].real
     p[k + 1 :: 2] = np.conj(p[k::2])
     r[k + 1 :: 2] = np.conj(r[k::2])
     return p, r

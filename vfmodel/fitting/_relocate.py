@@ -19,6 +19,7 @@ from vfmodel.fitting._vf_core import (
     FloatArray,
     IterationRecord,
     Problem,
+    _eigh,
     _realify,
     _scaled_lstsq,
     bases,
@@ -41,11 +42,11 @@ def _gram_rows(gram: FloatArray) -> FloatArray:
     # sum non-finite (|entries| <= 1 for a PSD matrix with unit diagonal; a sum that
     # overflows, from a Gram difference far from PSD, is refused the same way and the
     # caller takes the exact rows)
-    if not np.isfinite(float(np.sum(scaled))):
+    if not np.isfinite(float(scaled.sum())):
         raise np.linalg.LinAlgError("non-finite Gram matrix")
     # numpy's eigh (LAPACK's dsyevd called directly rounds differently, and the automatic
-    # order follows the rounding: mlin.s2p 22 -> 21 poles)
-    lam, vec = np.linalg.eigh(scaled)
+    # order follows the rounding: mlin.s2p 22 -> 21 poles), without its wrapper
+    lam, vec = _eigh(scaled)
     out: FloatArray = (np.sqrt(np.maximum(lam, 0.0))[:, None] * vec.T) / dsc[None, :]
     return out
 
