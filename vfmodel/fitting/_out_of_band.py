@@ -48,7 +48,7 @@ def _gain(prob: core.Problem, coef: core.Coefficients, n: int) -> float:
     if prob.fit_e:
         h = h + s_v[:, None] * coef.e[None, :]
     mats = np.concatenate([h.reshape(-1, n, n), coef.d.reshape(1, n, n)], axis=0)
-    return float(np.max(np.linalg.svd(mats, compute_uv=False)))
+    return float(np.max(core.singular_values(mats)))
 
 
 def lighter(
@@ -64,7 +64,7 @@ def lighter(
     if not err0 <= _TRY_BELOW:
         return None
     data = prob.h.reshape(-1, n_ports, n_ports)
-    top = float(np.max(np.linalg.svd(data, compute_uv=False)))
+    top = float(np.max(core.singular_values(data)))
     limit = max(_gain(prob, coef, n_ports), top, 1.0) + _SLACK
     anchors = prob.anchors
     trial = replace(prob, ridge=prob.ridge * _SCALE,

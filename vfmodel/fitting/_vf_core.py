@@ -284,12 +284,16 @@ def partial_fractions(s: ComplexArray, reps: ComplexArray) -> ComplexArray:
 
 
 def _with_extra(prob: Problem, s: ComplexArray, pf: ComplexArray) -> ComplexArray:
-    cols = [pf]
+    if not (prob.fit_d or prob.fit_e):
+        return pf
+    n = pf.shape[1]
+    out = np.empty((s.size, n + int(prob.fit_d) + int(prob.fit_e)), dtype=complex)
+    out[:, :n] = pf
     if prob.fit_d:
-        cols.append(np.ones((s.size, 1), complex))
+        out[:, n] = 1.0
     if prob.fit_e:
-        cols.append(s[:, None])
-    return np.concatenate(cols, axis=1) if len(cols) > 1 else pf
+        out[:, -1] = s
+    return out
 
 
 _BASIS_CACHE = 8  # bases of this many pole sets are kept per problem
@@ -355,7 +359,9 @@ def evaluate(
 
 def weighted_rel_rms(prob: Problem, model: ComplexArray) -> float:
     """||W (H_model - H)||_F / ||W H||_F."""
-    num = np.linalg.norm(prob.w * (model - prob.h))
+    # np.linalg.norm's arithmetic for complex data, without its wrapper
+    r = (prob.w * (model - prob.h)).ravel(order="K")
+    num = np.sqrt(r.real.dot(r.real) + r.imag.dot(r.imag))
     den = max(prob.wh_norm, _TINY)
     return float(num / den)
 
@@ -437,6 +443,15 @@ def _lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
         x = _umath_linalg.lstsq(a, b2, np.finfo(float).eps * max(m, n),
                                 signature="ddd->ddid")[0]
     out: FloatArray = x[:, 0] if b.ndim == 1 else x
+    return out
+
+
+def singular_values(a: NDArray[np.generic]) -> FloatArray:
+    """numpy.linalg.svd(a, compute_uv=False) of a stack of real or complex matrices."""
+    sig = "D->d" if np.iscomplexobj(a) else "d->d"
+    with np.errstate(call=_linalg_error, invalid="call", over="ignore", divide="ignore",
+                     under="ignore"):
+        out: FloatArray = _umath_linalg.svd(a, signature=sig)
     return out
 
 
@@ -586,7 +601,7 @@ def removal_state(prob: Problem, reps: ComplexArray) -> tuple[FloatArray, FloatA
     sys_ = _residue_system(prob, reps, None)
     a = sys_.a if sys_.a.ndim == 3 else sys_.a[None]
     b = sys_.b.T[:, :, None] if sys_.a.ndim == 3 else sys_.b[None]  # (Mw, 2K, M or 1)
-    norms = np.linalg.norm(a, axis=1, keepdims=True)
+    norms = np.sqrt(np.add.reduce(a * a, axis=1, keepdims=True))  # np.linalg.norm's
     norms = np.where(norms > 0, norms, 1.0)
     nk = a.shape[-1]
     with np.errstate(all="ignore"):
@@ -608,28 +623,20 @@ def removal_state(prob: Problem, reps: ComplexArray) -> tuple[FloatArray, FloatA
     return x, s_mat
 
 
-def _columns(reps: ComplexArray) -> tuple[int, NDArray[np.intp]]:
-    """Number of real representatives and the first basis column of each one."""
-    nr = reps.size - int(np.count_nonzero(reps.imag))
-    return nr, np.concatenate([np.arange(nr), nr + 2 * np.arange(reps.size - nr)])
-
-
 def costs_of_state(x: FloatArray, s_mat: FloatArray, reps: ComplexArray) -> FloatArray:
     """:func:`removal_costs` from the :func:`removal_state` of ``reps``."""
-    nr, j1 = _columns(reps)
+    nr = reps.size - int(np.count_nonzero(reps.imag))
+    n = nr + 2 * (reps.size - nr)  # the pole columns: the real ones, then pairs
     cost = np.zeros(reps.size)
     with np.errstate(all="ignore"):
+        diag = np.diagonal(s_mat, axis1=1, axis2=2)  # (Mw, Nk)
         if nr:
-            real_j = j1[:nr]
-            cost[:nr] = np.sum(x[:, real_j, :] ** 2 / s_mat[:, real_j, real_j][:, :, None],
-                               axis=(0, 2))
+            cost[:nr] = np.sum(x[:, :nr, :] ** 2 / diag[:, :nr, None], axis=(0, 2))
         if nr < reps.size:
-            c1 = j1[nr:]
-            c2 = c1 + 1
-            s11 = s_mat[:, c1, c1][:, :, None]
-            s22 = s_mat[:, c2, c2][:, :, None]
-            s12 = s_mat[:, c1, c2][:, :, None]
-            x1, x2 = x[:, c1, :], x[:, c2, :]
+            s11 = diag[:, nr:n:2, None]
+            s22 = diag[:, nr + 1 : n : 2, None]
+            s12 = np.diagonal(s_mat[:, nr:n:2, nr + 1 : n : 2], axis1=1, axis2=2)[:, :, None]
+            x1, x2 = x[:, nr:n:2, :], x[:, nr + 1 : n : 2, :]
             det = s11 * s22 - s12**2
             quad = (s22 * x1**2 - 2 * s12 * x1 * x2 + s11 * x2**2) / det
             cost[nr:] = np.sum(quad, axis=(0, 2))
@@ -646,24 +653,25 @@ def drop_representative(
     ``S_rr - S_rG S_GG^-1 S_Gr`` (the inverse of the remaining Gram matrix). Returns the
     new state, the representatives left and their removal costs; None when ``S_GG`` is
     singular (then factorise anew)."""
-    _, j1 = _columns(reps)
-    c0 = int(j1[j])
+    nr = reps.size - int(np.count_nonzero(reps.imag))
+    c0 = j if j < nr else nr + 2 * (j - nr)  # its first basis column
     cols = [c0] if reps[j].imag == 0 else [c0, c0 + 1]
     keep = np.ones(x.shape[1], dtype=bool)
     keep[cols] = False
-    s_gg = s_mat[:, cols][:, :, cols]  # (Mw, g, g), g = 1 or 2: inverted in closed form
-    a = s_gg[:, 0, 0]
+    # S_GG (Mw, g, g), g = 1 or 2, inverted in closed form
+    a = s_mat[:, c0, c0]
     if len(cols) == 1:
         ok = np.isfinite(a) & (a > 0)
         inv = (1.0 / np.where(ok, a, 1.0))[:, None, None]
     else:
-        b, d = s_gg[:, 0, 1], s_gg[:, 1, 1]
+        b, d = s_mat[:, c0, c0 + 1], s_mat[:, c0 + 1, c0 + 1]
         det = a * d - b * b  # S is symmetric positive definite: det > 0
         ok = np.isfinite(det) & (det > 1e-12 * np.abs(a * d))
         det = np.where(ok, det, 1.0)
-        inv = np.stack([np.stack([d, -b], axis=-1), np.stack([-b, a], axis=-1)],
-                       axis=-2) / det[:, None, None]
-    if not np.all(ok):
+        adj = np.empty((a.size, 2, 2))
+        adj[:, 0, 0], adj[:, 0, 1], adj[:, 1, 0], adj[:, 1, 1] = d, -b, -b, a
+        inv = adj / det[:, None, None]
+    if not ok.all():
         return None
     s_rg = s_mat[:, keep][:, :, cols]
     x_new = x[:, keep] - s_rg @ (inv @ x[:, cols])
