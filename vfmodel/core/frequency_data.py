@@ -222,7 +222,8 @@ class FrequencyData:
         z0 = complex(z0s.flat[0]) if z0s.size else 50.0
         if kind not in ("S", "Z", "Y"):
             raise InputError(f"a network cannot be read as {kind}", expected="Z, Y or S")
-        if z0s.size and (not np.allclose(z0s, z0) or abs(z0.imag) > 0):
+        if z0s.size and (abs(z0.imag) > 0 or not (bool(np.all(z0s == z0))
+                                                  or np.allclose(z0s, z0))):
             network, z0 = _common_reference(network, z0s, kind, source or network.name)
         # only the kind asked for: skrf converts on every access of .z and .y
         values = network.s if kind == "S" else network.z if kind == "Z" else network.y

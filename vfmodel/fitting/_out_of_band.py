@@ -23,8 +23,6 @@ with sigma(D) 1.0088 -> 1.0005.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from vfmodel.fitting import _relocate
@@ -67,9 +65,8 @@ def lighter(
     top = float(np.max(core.singular_values(data)))
     limit = max(_gain(prob, coef, n_ports), top, 1.0) + _SLACK
     anchors = prob.anchors
-    trial = replace(prob, ridge=prob.ridge * _SCALE,
-                    anchors=None if anchors is None
-                    else (anchors[0], anchors[1], anchors[2] * _SCALE))
+    trial = prob.with_out_of_band(prob.ridge * _SCALE,
+                                  None if anchors is None else anchors[2] * _SCALE)
     # kept only when it reaches err0 / _GAIN: given up once it cannot (iterate's target)
     res = _relocate.iterate(trial, coef.reps, max_iterations=max_iterations, tol=tol,
                             stable=stable, target=err0 / _GAIN)

@@ -27,7 +27,7 @@ Lett. 18(6), 2008. doi:10.1109/LMWC.2008.922585
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -160,6 +160,20 @@ class Problem:
     @property
     def n_extra(self) -> int:
         return int(self.fit_d) + int(self.fit_e)
+
+    def with_out_of_band(self, ridge: float, anchor_weight: float | None) -> Problem:
+        """The same problem with another ridge and anchor weight; the derived arrays that
+        do not depend on them (weighted data, the bases of the pole sets seen, the
+        anchors' frequencies) are shared, not computed again."""
+        anchors = self.anchors
+        if anchors is not None and anchor_weight is not None:
+            anchors = (anchors[0], anchors[1], anchor_weight)
+        out = replace(self, ridge=ridge, anchors=anchors)
+        for name in ("wh", "wh_norm", "power", "w2", "_s_all"):
+            if name in self.__dict__:
+                out.__dict__[name] = self.__dict__[name]
+        out.__dict__["_bases"] = dict(self._bases)  # its own, from the same entries
+        return out
 
 
 @dataclass(frozen=True)
