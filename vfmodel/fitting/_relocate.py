@@ -29,6 +29,7 @@ from vfmodel.fitting._vf_core import (
     n_poles,
     partial_fractions,
     reps_from_eigenvalues,
+    reps_from_parts,
     solve_residues,
     weighted_rel_rms,
 )
@@ -186,9 +187,8 @@ def relocate_poles(
     wr, wi, _, _, info = _lapack.dgeev(a_mat, compute_vl=0, compute_vr=0)
     if info != 0:
         z = np.asarray(np.linalg.eigvals(a_mat), dtype=complex)
-    else:
-        z = wr + 1j * wi
-    return reps_from_eigenvalues(z, stable), deviation
+        return reps_from_eigenvalues(z, stable), deviation
+    return reps_from_parts(wr, wi, stable), deviation
 
 
 _FORMS: dict[tuple[int, int], tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp],

@@ -230,19 +230,29 @@ def sort_reps(reps: ComplexArray) -> ComplexArray:
 def reps_from_eigenvalues(z: ComplexArray, stable: bool) -> ComplexArray:
     """Representatives from the eigenvalues of a real matrix (unstable ones flipped)."""
     z = np.asarray(z, dtype=complex)
-    im = z.imag
-    is_real = np.abs(im) <= 1e-12 * np.maximum(np.abs(z), _TINY)
-    real = z.real[is_real]
-    cplx = z[~is_real & (im > 0)]
+    return reps_from_parts(z.real, z.imag, stable)
+
+
+def reps_from_parts(wr: FloatArray, wi: FloatArray, stable: bool) -> ComplexArray:
+    """:func:`reps_from_eigenvalues` of the eigenvalues ``wr + j wi`` (LAPACK's geev
+    output), without forming them."""
+    mag = np.hypot(wr, wi)  # |z|, as np.abs of the complex values computes it
+    is_real = np.abs(wi) <= 1e-12 * np.maximum(mag, _TINY)
+    real = wr[is_real]
+    upper = ~is_real & (wi > 0)
+    c_re, c_im = wr[upper], wi[upper]
     if stable:
         # Flip unstable poles into the left half plane; keep a tiny damping for poles on
         # the imaginary axis so that the model stays strictly stable.
         real = -np.maximum(np.abs(real), 1e-12)
-        re = -np.maximum(np.abs(cplx.real), 1e-9 * np.abs(cplx))
-        cplx = re + 1j * cplx.imag
-    out: ComplexArray = np.empty(real.size + cplx.size, dtype=complex)
-    out[: real.size] = np.sort(real)[::-1]
-    out[real.size :] = cplx[np.argsort(cplx.imag)]
+        c_re = -np.maximum(np.abs(c_re), 1e-9 * mag[upper])
+    n_r = real.size
+    out: ComplexArray = np.empty(n_r + c_re.size, dtype=complex)
+    out.real[:n_r] = np.sort(real)[::-1]
+    out.imag[:n_r] = 0.0
+    order = np.argsort(c_im)
+    out.real[n_r:] = c_re[order]
+    out.imag[n_r:] = c_im[order]
     return out
 
 
