@@ -93,3 +93,19 @@ def test_state_form_matches_the_real_block_form() -> None:
     z = np.sort_complex(np.linalg.eigvals(a))
     assert np.allclose(z, np.sort_complex(np.concatenate([reps, reps[2:].conj()])),
                        atol=1e-14)
+
+
+def test_reps_from_parts_equals_the_complex_path() -> None:
+    # the relocation takes geev's (wr, wi) directly; it must give exactly what the
+    # complex eigenvalues give (the automatic order follows the last bit)
+    from vfmodel.fitting._vf_core import reps_from_eigenvalues, reps_from_parts
+
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        n = int(rng.integers(1, 25))
+        w = np.linalg.eigvals(rng.normal(size=(n, n)) * rng.uniform(1e-3, 1e3))
+        for stable in (True, False):
+            a = reps_from_eigenvalues(w, stable)
+            b = reps_from_parts(w.real.copy(), w.imag.copy(), stable)
+            assert a.shape == b.shape
+            assert np.array_equal(a.real, b.real) and np.array_equal(a.imag, b.imag)
