@@ -3,21 +3,28 @@ port Touchstone file of at most 2,000 points that scikit-rf ships and that data/
 holds, both timed in this process, interleaved, median over ``--runs``.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_smallfit.py [--runs 7] [--files GLOB]
+                                                  [--extra DIR ...] [--only-extra]
 
 Per file: points, ports, median fit time of each tool, ratio vfmodel / scikit-rf, each
 tool's automatic order (every pole counted) and relative RMS error
 ``||S_model - S_data||_F / ||S_data||_F``; then the median ratio over the files.
-``--agilent`` adds the Agilent 4-port (data/touchstone), timed the same way.
+``--agilent`` adds the Agilent 4-port (data/touchstone), timed the same way; ``--extra DIR``
+adds the Touchstone files of DIR (files never seen), ``--only-extra`` times those alone. A
+file whose first scikit-rf fit runs beyond ``--skrf-limit`` seconds (60) is shown, not timed
+(NanoVNA-Saver's sucoflex290mm.s1p: more than 10 minutes).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import statistics
 import sys
 import time
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,14 +32,36 @@ ROOT = Path(__file__).resolve().parents[1]
 _SMALL = (2, 2000)  # ports, points
 
 
-def _files(pattern: str | None, agilent: bool) -> list[Path]:
+def _files(pattern: str | None, agilent: bool, extra: list[str], only_extra: bool
+           ) -> list[Path]:
     sys.path.insert(0, str(ROOT / "scripts"))
     from vfbench import _files as vfbench_files  # the files vfbench runs
 
-    out = vfbench_files([], pattern)
+    out = vfbench_files(extra, pattern)
+    if only_extra:
+        own = set(vfbench_files([], pattern))
+        out = [p for p in out if p not in own]
     if agilent:
         out.append(ROOT / "data" / "touchstone" / "Agilent_E5071B.s4p")
     return out
+
+
+class _Overtime(Exception):
+    """scikit-rf's fit ran beyond --skrf-limit seconds (the file is shown, not timed)."""
+
+
+@contextlib.contextmanager
+def _time_limit(seconds: float) -> Iterator[None]:
+    def _stop(signum: int, frame: Any) -> None:
+        raise _Overtime(f"scikit-rf's auto_fit ran beyond {seconds:g} s")
+
+    old = signal.signal(signal.SIGALRM, _stop)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def main() -> int:
@@ -40,6 +69,10 @@ def main() -> int:
     p.add_argument("--runs", type=int, default=7)
     p.add_argument("--files", default=None, help="only files whose name matches this glob")
     p.add_argument("--agilent", action="store_true", help="add the Agilent 4-port")
+    p.add_argument("--extra", action="append", default=[], help="more Touchstone folders")
+    p.add_argument("--only-extra", action="store_true", help="time the --extra files alone")
+    p.add_argument("--skrf-limit", type=float, default=60.0,
+                   help="seconds after which scikit-rf's first fit of a file is stopped")
     args = p.parse_args()
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
@@ -54,7 +87,7 @@ def main() -> int:
     print(f"{'file':<34} {'pts':>5} {'ports':>5} {'vf s':>8} {'skrf s':>8} {'ratio':>6} "
           f"{'N vf':>5} {'N skrf':>6} {'err vf':>9} {'err skrf':>9}")
     ratios: list[float] = []
-    for path in _files(args.files, args.agilent):
+    for path in _files(args.files, args.agilent, args.extra, args.only_extra):
         net = skrf.Network(str(path))
         k, n = net.s.shape[0], net.s.shape[1]
         big = path.name.startswith("Agilent")
@@ -66,7 +99,8 @@ def main() -> int:
         out_sk: Any = None
         try:
             vector_fit(net)  # warm (imports, caches) for both tools alike
-            skrf.vectorFitting.VectorFitting(net).auto_fit()
+            with _time_limit(args.skrf_limit):  # scikit-rf's auto_fit can run for ever
+                skrf.vectorFitting.VectorFitting(net).auto_fit()
             for _ in range(args.runs):
                 t0 = time.perf_counter()
                 out_vf = vector_fit(net)
@@ -76,7 +110,8 @@ def main() -> int:
                 out_sk.auto_fit()
                 t_sk.append(time.perf_counter() - t0)
         except Exception as err:  # a tool refusing the file: shown, not timed
-            print(f"{path.name:<34} {k:5d} {n:5d}  {type(err).__name__}: {str(err)[:60]}")
+            print(f"{path.name:<34} {k:5d} {n:5d}  {type(err).__name__}: {str(err)[:60]}",
+                  flush=True)
             continue
         f, h = net.f, net.s
         model, _ = out_vf
