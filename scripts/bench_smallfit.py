@@ -17,14 +17,11 @@ file whose first scikit-rf fit runs beyond ``--skrf-limit`` seconds (60) is show
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
-import signal
 import statistics
 import sys
 import time
 import warnings
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -46,24 +43,6 @@ def _files(pattern: str | None, agilent: bool, extra: list[str], only_extra: boo
     return out
 
 
-class _Overtime(Exception):
-    """scikit-rf's fit ran beyond --skrf-limit seconds (the file is shown, not timed)."""
-
-
-@contextlib.contextmanager
-def _time_limit(seconds: float) -> Iterator[None]:
-    def _stop(signum: int, frame: Any) -> None:
-        raise _Overtime(f"scikit-rf's auto_fit ran beyond {seconds:g} s")
-
-    old = signal.signal(signal.SIGALRM, _stop)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
-
-
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--runs", type=int, default=7)
@@ -80,6 +59,9 @@ def main() -> int:
     import skrf
 
     sys.path.insert(0, str(ROOT))
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from vfbench import time_limit
+
     from benches.skrf_reference import skrf_order, skrf_response
     from vfmodel.fitting.vectfit import vector_fit
 
@@ -99,7 +81,7 @@ def main() -> int:
         out_sk: Any = None
         try:
             vector_fit(net)  # warm (imports, caches) for both tools alike
-            with _time_limit(args.skrf_limit):  # scikit-rf's auto_fit can run for ever
+            with time_limit(args.skrf_limit, "scikit-rf's auto_fit"):  # can run for ever
                 skrf.vectorFitting.VectorFitting(net).auto_fit()
             for _ in range(args.runs):
                 t0 = time.perf_counter()

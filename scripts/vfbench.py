@@ -23,12 +23,15 @@ thread (set before numpy loads).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import glob
 import os
+import signal
 import statistics
 import sys
 import time
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +47,9 @@ def _args() -> argparse.Namespace:
     p.add_argument("--extra", action="append", default=[], help="more Touchstone folders")
     p.add_argument("--files", default=None, help="only files whose name matches this glob")
     p.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    p.add_argument("--skrf-limit", type=float, default=60.0,
+                   help="seconds per run after which scikit-rf's fit of a file is stopped "
+                   "(NanoVNA-Saver's sucoflex290mm.s1p ran for more than 10 minutes)")
     p.add_argument("--impedance-seeds", default=None,
                    help="instead: per-point error against the noise-free truth of the PMSM "
                    "bench impedances (0.5 %% noise) for these seeds, e.g. 0-5")
@@ -136,7 +142,27 @@ def _median_time(fn: Any, runs: int) -> tuple[Any, float]:
     return out, statistics.median(times)
 
 
-def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any) -> dict[str, Any]:
+class Overtime(Exception):
+    """A scikit-rf fit ran beyond its time limit (the file is shown, not timed)."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float, what: str) -> Iterator[None]:
+    """Raise :class:`Overtime` in the block after ``seconds`` (SIGALRM: main thread)."""
+    def _stop(signum: int, frame: Any) -> None:
+        raise Overtime(f"{what} ran beyond {seconds:g} s")
+
+    old = signal.signal(signal.SIGALRM, _stop)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any, limit: float
+               ) -> dict[str, Any]:
     import numpy as np
     import skrf
 
@@ -150,7 +176,8 @@ def _skrf_case(net: Any, runs: int, passive: bool, f: Any, h: Any) -> dict[str, 
     def resp(vf: Any) -> Any:
         return skrf_response(vf, f)
 
-    vf, t = _median_time(fit, runs)
+    with time_limit(limit * runs, "scikit-rf's auto_fit"):
+        vf, t = _median_time(fit, runs)
     row: dict[str, Any] = {
         "order": skrf_order(vf),
         "err": float(np.linalg.norm(resp(vf) - h) / np.linalg.norm(h)), "time": t,
@@ -247,7 +274,8 @@ def main() -> int:
             try:
                 net = skrf.Network(str(path))
                 runs = args.runs if vf.get("small") else 1
-                sk = _skrf_case(net, runs, not args.no_skrf_passive, md[0], md[1])
+                sk = _skrf_case(net, runs, not args.no_skrf_passive, md[0], md[1],
+                                args.skrf_limit)
             except Exception as err:
                 sk = {"note": f"skrf: {type(err).__name__}: {str(err)[:50]}"}
         if "err" in vf and "err" in sk:
