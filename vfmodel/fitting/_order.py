@@ -329,7 +329,7 @@ def auto_order(
 
     ``finish`` (an S fit's lighter out-of-band control) relocates the chosen poles once
     more in its own problem; when it keeps that relocation, the final relocation in
-    ``prob`` is not made (it would be undone: 1-9 relocations of a small noise-free fit).
+    ``prob`` is not made (it would be undone: 1-4 relocations of a small noise-free fit).
     """
     noise = estimate_noise(prob) if target is None else target / margin
     # no measurable noise floor: the order grows until adding poles stops paying

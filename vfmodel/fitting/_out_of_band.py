@@ -9,7 +9,8 @@ against 5.8e-10, open.s2p 8.6e-7 against 1.2e-10).
 
 Once the automatic order (or the given order) is reached, the poles are relocated once
 more at that order, from where they are, with both weights scaled down by 1e-6 (the
-order and the order decision stay as they are). It is tried only when the anchored
+order and the order decision stay as they are); when kept, this relocation replaces the
+automatic order's final one (``auto_order(finish=)``). It is tried only when the anchored
 fit's weighted error is below 1e-5, and kept only when it cuts the weighted error by
 at least ``_GAIN`` and its out-of-band gain -- the largest singular value at 0 Hz, at
 the anchor frequencies and of D -- does not exceed the anchored fit's (or the data's

@@ -272,7 +272,8 @@ def vector_fit(
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise, hit_max = auto.reason, auto.noise_floor, auto.hit_max
-        prob = auto.prob or prob
+        if auto.prob is not None:  # the lighter relocation was kept
+            prob = auto.prob
     else:
         if isinstance(order, bool) or not isinstance(order, int | np.integer):
             raise InputError("order must be a positive integer or 'auto'", found=repr(order))
