@@ -188,6 +188,14 @@ def test_one_data_argument_everywhere() -> None:
     back = ref.to_network(fd.freq_hz)
     assert isinstance(back, skrf.Network)
     np.testing.assert_allclose(back.s, ref(fd.freq_hz), rtol=1e-12)
+    # the fit job too (a path raised AttributeError: it took only a list of FrequencyData)
+    job = run_fit([fd])
+    for arg in (net, str(path), path, [path]):
+        res = run_fit(arg)
+        np.testing.assert_allclose(res.model(fd.freq_hz), job.model(fd.freq_hz), rtol=1e-6,
+                                   atol=1e-9)
+    with pytest.raises(InputError, match=r"FrequencyData, a skrf\.Network or a path"):
+        run_fit(42)
 
 
 # ---------------------------------------------------------------------- active data

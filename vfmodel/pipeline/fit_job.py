@@ -23,7 +23,7 @@ import numpy as np
 
 from vfmodel._choices import DcMode, Kind, Weighting
 from vfmodel.core.blas import capped_blas
-from vfmodel.core.frequency_data import FrequencyData
+from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
@@ -52,13 +52,17 @@ class FitJobResult:
     data_passivity: DataPassivity | None = None
 
 
-def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> FrequencyData:
-    """One block-diagonal response from several spectra on the same frequency grid."""
-    if not spectra:
+def combine_spectra(spectra: Any, kind: Kind | None) -> FrequencyData:
+    """One block-diagonal response from several spectra on the same frequency grid
+    (``spectra``: one data argument -- FrequencyData, skrf.Network or path -- or a list
+    of them)."""
+    items = list(spectra) if isinstance(spectra, list | tuple) else [spectra]
+    if not items:
         raise InputError("no spectrum given", expected="one or more spectrum files")
-    target: Kind = kind or spectra[0].kind
-    conv = [s.to_kind(target) if target != "H" or s.kind == "H" else s for s in spectra]
-    if target == "H" and any(s.kind != "H" for s in spectra):
+    fds: list[FrequencyData] = [as_frequency_data(s, source="run_fit") for s in items]
+    target: Kind = kind or fds[0].kind
+    conv = [s.to_kind(target) if target != "H" or s.kind == "H" else s for s in fds]
+    if target == "H" and any(s.kind != "H" for s in fds):
         raise InputError("cannot fit network parameters as H", expected="--kind Z, Y or S")
     if len(conv) == 1:
         return conv[0]
@@ -90,7 +94,7 @@ def combine_spectra(spectra: list[FrequencyData], kind: Kind | None) -> Frequenc
 
 @capped_blas
 def run_fit(
-    spectra: list[FrequencyData],
+    spectra: Any,
     *,
     order: int | Literal["auto"] = "auto",
     kind: Kind | None = None,
@@ -106,6 +110,9 @@ def run_fit(
     enforce_margin: float | None = None,
 ) -> FitJobResult:
     """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
+
+    ``spectra``: one data argument (:class:`FrequencyData`, ``skrf.Network`` or a path to
+    a Touchstone/CSV file) or a list of them, fitted together (:func:`combine_spectra`).
 
     ``clean``: leave export padding and isolated spikes out of the fit (module docstring).
     The data's own passivity violation floor is measured first; with ``passive``, active
