@@ -31,8 +31,7 @@ _SMALL = (2, 2000)  # ports, points
 
 def _files(pattern: str | None, agilent: bool, extra: list[str], only_extra: bool
            ) -> list[Path]:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from vfbench import _files as vfbench_files  # the files vfbench runs
+    from vfbench import _files as vfbench_files  # the files vfbench runs (scripts/ on path)
 
     out = vfbench_files(extra, pattern)
     if only_extra:

@@ -122,3 +122,26 @@ def test_reps_from_parts_equals_the_complex_path() -> None:
             b = reps_from_parts(wr.copy(), wi.copy(), stable)
             assert a.shape == b.shape
             assert np.array_equal(a.real, b.real) and np.array_equal(a.imag, b.imag)
+
+
+def test_gufunc_wrappers_equal_numpy_linalg() -> None:
+    # eigh, lstsq and singular values called without numpy.linalg's wrappers must give
+    # numpy.linalg's results to the last bit (the automatic order follows rounding), and
+    # a LAPACK failure must still raise LinAlgError
+    import pytest
+
+    rng = np.random.default_rng(4)
+    a = rng.normal(size=(9, 9))
+    sym = a + a.T
+    lam, vec = core._eigh(sym)
+    ref_lam, ref_vec = np.linalg.eigh(sym)
+    assert np.array_equal(lam, ref_lam) and np.array_equal(vec, ref_vec)
+    tall = rng.normal(size=(12, 7))
+    tall[:, 6] = tall[:, 5]  # rank deficient: the minimum-norm solution
+    for rhs in (rng.normal(size=12), rng.normal(size=(12, 3))):
+        assert np.array_equal(core._lstsq(tall, rhs),
+                              np.linalg.lstsq(tall, rhs, rcond=None)[0])
+    stack = rng.normal(size=(5, 2, 2)) + 1j * rng.normal(size=(5, 2, 2))
+    assert np.array_equal(core.singular_values(stack), np.linalg.svd(stack, compute_uv=False))
+    with pytest.raises(np.linalg.LinAlgError):
+        core._eigh(np.full((3, 3), np.nan))

@@ -34,9 +34,45 @@ def _canonical_order(
     """
     scale = np.maximum(np.abs(poles), 1e-300)
     is_real = np.abs(poles.imag) <= _PAIR_TOL * scale
-    fast = _already_canonical(poles, residues, scale, is_real)
-    if fast is not None:
-        return fast
+    k = int(np.count_nonzero(is_real))
+    if _in_canonical_order(poles, residues, scale, is_real, k):
+        idx: list[int] | slice = slice(None)  # a fit's model: no search
+    else:
+        idx = _search_pairs(poles, residues, scale, is_real, src)
+    p = poles[idx].copy()
+    r = residues[idx].copy()
+    p[:k] = p[:k].real
+    r[:k] = r[:k].real
+    # make the pairs exactly conjugate
+    p[k + 1 :: 2] = np.conj(p[k::2])
+    r[k + 1 :: 2] = np.conj(r[k::2])
+    return p, r
+
+
+def _in_canonical_order(
+    poles: NDArray[np.complex128], residues: NDArray[np.complex128],
+    scale: NDArray[np.float64], is_real: NDArray[np.bool_], k: int,
+) -> bool:
+    """True when the ``k`` real poles come first and every upper pole is followed by its
+    conjugate with a conjugate residue, within :func:`_search_pairs`' tolerances."""
+    up, lo = poles[k::2], poles[k + 1 :: 2]
+    if not (bool(np.all(is_real[:k])) and up.size == lo.size and bool(np.all(up.imag > 0))
+            and bool(np.all(np.abs(lo - up.conj()) <= 1e-6 * scale[k::2]))):
+        return False
+    if up.size == 0:
+        return True
+    r_up, r_lo = residues[k::2], residues[k + 1 :: 2]
+    rscale = np.maximum(np.max(np.abs(r_up).reshape(up.size, -1), axis=1), 1e-300)
+    miss = np.max(np.abs(r_lo - r_up.conj()).reshape(up.size, -1), axis=1)
+    return bool(np.all(miss <= 1e-6 * rscale))  # else the search names the pair
+
+
+def _search_pairs(
+    poles: NDArray[np.complex128], residues: NDArray[np.complex128],
+    scale: NDArray[np.float64], is_real: NDArray[np.bool_], src: str,
+) -> list[int]:
+    """The canonical order's indices: the real poles, then each upper pole and its
+    conjugate found among the lower ones (InputError for an unpaired pole or residue)."""
     order: list[int] = [int(i) for i in np.flatnonzero(is_real)]
     upper = [int(i) for i in np.flatnonzero(~is_real & (poles.imag > 0))]
     lower = {int(i) for i in np.flatnonzero(~is_real & (poles.imag < 0))}
@@ -68,44 +104,7 @@ def _canonical_order(
         raise InputError(
             "complex pole without its conjugate", source=src, found=f"pole {poles[j]:.6g}"
         )
-    idx = order + pairs
-    p = poles[idx].copy()
-    r = residues[idx].copy()
-    p[: len(order)] = p[: len(order)].real
-    r[: len(order)] = r[: len(order)].real
-    # make the pairs exactly conjugate
-    k = len(order)
-    p[k + 1 :: 2] = np.conj(p[k::2])
-    r[k + 1 :: 2] = np.conj(r[k::2])
-    return p, r
-
-
-def _already_canonical(
-    poles: NDArray[np.complex128], residues: NDArray[np.complex128],
-    scale: NDArray[np.float64], is_real: NDArray[np.bool_],
-) -> tuple[NDArray[np.complex128], NDArray[np.complex128]] | None:
-    """What :func:`_canonical_order` returns, without its search, for poles already in
-    that order (a fit's model: the real poles, then each upper pole followed by its
-    conjugate, within its tolerances); None otherwise."""
-    k = int(np.count_nonzero(is_real))
-    up, lo = poles[k::2], poles[k + 1 :: 2]
-    if not (bool(np.all(is_real[:k])) and up.size == lo.size and bool(np.all(up.imag > 0))
-            and bool(np.all(np.abs(lo - up.conj()) <= 1e-6 * scale[k::2]))):
-        return None
-    if up.size:
-        r_up, r_lo = residues[k::2], residues[k + 1 :: 2]
-        flat = np.abs(r_up).reshape(up.size, -1)
-        rscale = np.maximum(np.max(flat, axis=1), 1e-300)
-        miss = np.abs(r_lo - r_up.conj()).reshape(up.size, -1)
-        if not bool(np.all(np.max(miss, axis=1) <= 1e-6 * rscale)):
-            return None  # the general path names the pair
-    p = poles.copy()
-    r = residues.copy()
-    p[:k] = p[:k].real
-    r[:k] = r[:k].real
-    p[k + 1 :: 2] = np.conj(p[k::2])
-    r[k + 1 :: 2] = np.conj(r[k::2])
-    return p, r
+    return order + pairs
 
 
 @dataclass(frozen=True)

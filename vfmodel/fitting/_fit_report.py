@@ -150,20 +150,8 @@ def fit_errors(
     diff = (model(fd.freq_hz) if values is None else values) - fd.values
     mag = np.abs(diff)
     rms = float(np.sqrt(np.mean(mag**2)))
-    rel = float(_norm(diff) / max(float(_norm(fd.values)), 1e-300))
+    rel = _vf_core.frobenius(diff) / max(_vf_core.frobenius(fd.values), 1e-300)
     return rms, rel, float(mag.max())
-
-
-def _norm(x: NDArray[np.complex128]) -> float:
-    """np.linalg.norm(x) of complex x (its arithmetic, without its wrapper)."""
-    r = x.ravel(order="K")
-    return float(np.sqrt(r.real.dot(r.real) + r.imag.dot(r.imag)))
-
-
-def _row_norms(x: NDArray[np.complex128]) -> NDArray[np.float64]:
-    """np.linalg.norm(x, axis=1) of complex 2-D x (its arithmetic)."""
-    out: NDArray[np.float64] = np.sqrt(np.add.reduce((x.conj() * x).real, axis=1))
-    return out
 
 
 def point_errors(
@@ -173,8 +161,8 @@ def point_errors(
     ||H_model(f) - H_data(f)||_F / ||H_data(f)||_F (a zero sample counts against 1e-12
     of the largest); ``values`` as for :func:`fit_errors`."""
     hm = model(fd.freq_hz) if values is None else values
-    diff = _row_norms((hm - fd.values).reshape(fd.n_freq, -1))
-    norm = _row_norms(fd.values.reshape(fd.n_freq, -1))
+    diff = _vf_core.row_norms((hm - fd.values).reshape(fd.n_freq, -1))
+    norm = _vf_core.row_norms(fd.values.reshape(fd.n_freq, -1))
     norm = np.maximum(norm, 1e-12 * float(np.max(norm)))
     e = diff / np.where(norm > 0, norm, 1.0)
     return float(np.sqrt(np.mean(e**2))), float(np.max(e))

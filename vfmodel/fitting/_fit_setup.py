@@ -229,11 +229,7 @@ def _phase_turns(fd: FrequencyData) -> float:
     1 % of the energy: a long delay shows as many turns."""
     h = fd.values.reshape(fd.n_freq, -1)
     energy = np.sum(np.abs(h) ** 2, axis=0)
-    # the unwrapped phase's end-to-end change: the sum of the steps wrapped to
-    # [-pi, pi) (np.unwrap's steps, without building the unwrapped phase)
-    step = np.diff(np.angle(h[:, energy >= 1e-2 * energy.max()]), axis=0)
-    wrapped = np.where(np.abs(step) < np.pi, step,
-                       np.mod(step + np.pi, 2 * np.pi) - np.pi)
-    return float(np.max(np.abs(np.sum(wrapped, axis=0)) / (2 * np.pi), initial=0.0))
+    ph = np.unwrap(np.angle(h[:, energy >= 1e-2 * energy.max()]), axis=0)
+    return float(np.max(np.abs(ph[-1] - ph[0]) / (2 * np.pi), initial=0.0))
 
 

@@ -29,10 +29,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
-from numpy.linalg import _umath_linalg
 from numpy.typing import NDArray
 from scipy.linalg import lapack as _lapack
 
@@ -383,11 +383,7 @@ def evaluate(
 
 def weighted_rel_rms(prob: Problem, model: ComplexArray) -> float:
     """||W (H_model - H)||_F / ||W H||_F."""
-    # np.linalg.norm's arithmetic for complex data, without its wrapper
-    r = (prob.w * (model - prob.h)).ravel(order="K")
-    num = np.sqrt(r.real.dot(r.real) + r.imag.dot(r.imag))
-    den = max(prob.wh_norm, _TINY)
-    return float(num / den)
+    return frobenius(prob.w * (model - prob.h)) / max(prob.wh_norm, _TINY)
 
 
 # ---------------------------------------------------------------------- solves
@@ -446,41 +442,66 @@ def _scaled_lstsq(
 
 
 # numpy.linalg's gufuncs, called without the wrappers' checks (the same LAPACK routines
-# of numpy's own library, hence the same rounding; 6-8 us less per call at these sizes);
-# their errors (NaN results) are turned into numpy's LinAlgError as the wrappers do
+# of numpy's own library, hence the same rounding; 6-8 us less per call at these sizes),
+# under the wrappers' error state: a LAPACK failure (NaN results) raises LinAlgError. A
+# numpy without the private module gets the public functions.
+_gufuncs: Any
+try:
+    from numpy.linalg import _umath_linalg as _gufuncs
+except ImportError:  # pragma: no cover - numpy's layout changed
+    _gufuncs = None
+
+
+def _linalg_error(err: str, flag: int) -> None:
+    raise np.linalg.LinAlgError(f"LAPACK did not converge ({err})")
+
+
+def _lapack_errors() -> np.errstate:
+    return np.errstate(call=_linalg_error, invalid="call", over="ignore", divide="ignore",
+                       under="ignore")
+
+
 def _eigh(a: FloatArray) -> tuple[FloatArray, FloatArray]:
     """numpy.linalg.eigh of a real symmetric matrix (lower triangle)."""
-    with np.errstate(call=_linalg_error, invalid="call", over="ignore", divide="ignore",
-                     under="ignore"):
-        lam, vec = _umath_linalg.eigh_lo(a, signature="d->dd")
+    if _gufuncs is None:  # pragma: no cover
+        lam, vec = np.linalg.eigh(a)
+        return lam, vec
+    with _lapack_errors():
+        lam, vec = _gufuncs.eigh_lo(a, signature="d->dd")
     return lam, vec
 
 
 def _lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
     """numpy.linalg.lstsq(a, b, rcond=None)[0] of real a (m, n), b (m,) or (m, k)."""
     m, n = a.shape
-    if m == 0 or n == 0 or b.size == 0:
+    if _gufuncs is None or m == 0 or n == 0 or b.size == 0:
         return np.asarray(np.linalg.lstsq(a, b, rcond=None)[0], dtype=float)
     b2 = b[:, None] if b.ndim == 1 else b
-    with np.errstate(call=_linalg_error, invalid="call", over="ignore", divide="ignore",
-                     under="ignore"):
-        x = _umath_linalg.lstsq(a, b2, np.finfo(float).eps * max(m, n),
-                                signature="ddd->ddid")[0]
+    with _lapack_errors():
+        x = _gufuncs.lstsq(a, b2, np.finfo(float).eps * max(m, n), signature="ddd->ddid")[0]
     out: FloatArray = x[:, 0] if b.ndim == 1 else x
     return out
 
 
-def singular_values(a: NDArray[np.generic]) -> FloatArray:
+def singular_values(a: NDArray[np.complex128] | FloatArray) -> FloatArray:
     """numpy.linalg.svd(a, compute_uv=False) of a stack of real or complex matrices."""
-    sig = "D->d" if np.iscomplexobj(a) else "d->d"
-    with np.errstate(call=_linalg_error, invalid="call", over="ignore", divide="ignore",
-                     under="ignore"):
-        out: FloatArray = _umath_linalg.svd(a, signature=sig)
+    if _gufuncs is None:  # pragma: no cover
+        return np.asarray(np.linalg.svd(a, compute_uv=False), dtype=np.float64)
+    with _lapack_errors():
+        out: FloatArray = _gufuncs.svd(a, signature="D->d" if np.iscomplexobj(a) else "d->d")
     return out
 
 
-def _linalg_error(err: str, flag: int) -> None:
-    raise np.linalg.LinAlgError(f"LAPACK did not converge ({err})")
+def frobenius(x: NDArray[np.complexfloating]) -> float:
+    """np.linalg.norm(x) of complex x: its arithmetic, without its wrapper."""
+    r = x.ravel(order="K")
+    return float(np.sqrt(r.real.dot(r.real) + r.imag.dot(r.imag)))
+
+
+def row_norms(x: NDArray[np.complexfloating]) -> FloatArray:
+    """np.linalg.norm(x, axis=1) of complex 2-D x (its arithmetic)."""
+    out: FloatArray = np.sqrt(np.add.reduce((x.conj() * x).real, axis=1))
+    return out
 
 
 def _batched_scaled_lstsq(a: FloatArray, b: FloatArray) -> FloatArray:
