@@ -265,6 +265,8 @@ def vector_fit(
             stable=enforce_stability,
             target=target_error,
             margin=_order.RELATIVE_MARGIN if wname == "relative" else _order.NOISE_MARGIN,
+            plateau_margin=(_order.RELATIVE_MARGIN if wname == "relative"
+                            else _order.PLATEAU_MARGIN),
             # a response whose phase turns many times needs about two poles per turn:
             # no plateau is declared below that order
             min_order=min(cap, int(2 * _phase_turns(fd)) + 4),
