@@ -11,7 +11,7 @@ from vfmodel.cli._common import finite_json, out_option, progress_bar, quiet_opt
 from vfmodel.core.atomic import staged_output
 from vfmodel.core.io_spectrum import read_spectrum, spectrum_format
 from vfmodel.errors import InputError
-from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS, ENFORCE_TIME_LIMIT
 
 FIT_OUTPUTS = ("model.json", "fit.png", "report.html")
 """Outputs of ``fit`` in DIR (an earlier run's are replaced, never mixed with a new one)."""
@@ -79,6 +79,10 @@ def _order(value: str) -> int | str:
               help="Relative passivity margin required at the cut frequencies "
               "[default: 1e-6, or a tenth of max(fit error, data floor) when smaller, "
               "at least 1e-10].")
+@click.option("--enforce-time-limit", type=click.FloatRange(min=0), default=ENFORCE_TIME_LIMIT,
+              show_default=True, help="Seconds after the first passivity enforcement from "
+              "which its retries (for an enforced error within 1.2x of max(fit error, data "
+              "floor)) start no further enforcement; 0: no limit.")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Also write a SPICE subcircuit '.subckt NAME p1..pN ref'.")
 @click.option("--subckt-name", default="vfmodel", show_default=True,
@@ -89,7 +93,8 @@ def _order(value: str) -> int | str:
 def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
         max_order: int | None, target_error: float | None, delay: str, dc: str,
         passive: bool,
-        enforce_iterations: int, enforce_margin: float | None, spice: Path | None,
+        enforce_iterations: int, enforce_margin: float | None, enforce_time_limit: float,
+        spice: Path | None,
         subckt_name: str, no_plot: bool, out_dir: Path, quiet: bool) -> None:
     """Vector-fit one or more spectra (Touchstone of any port count, or CSV) to a rational
     model with common poles; several files make a block-diagonal model. Writes
@@ -107,7 +112,8 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
                                  "_ . -, starting with a letter or _)",
                                  param_hint="--subckt-name")
     opts = {"delay": _delay(delay), "max_order": max_order, "target_error": target_error, "dc": dc,
-            "enforce_iterations": enforce_iterations, "enforce_margin": enforce_margin}
+            "enforce_iterations": enforce_iterations, "enforce_margin": enforce_margin,
+            "enforce_time_limit": enforce_time_limit}
     if spice is not None and spice.suffix.lower() not in (".cir", ".sp", ".spice", ".lib",
                                                           ".sub", ".subckt", ".net"):
         raise InputError("unknown SPICE file suffix", source=str(spice),

@@ -13,6 +13,7 @@ spikes included.
 
 from __future__ import annotations
 
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -29,7 +30,7 @@ from vfmodel.core.rational_model import RationalModel
 from vfmodel.errors import FitWarning, InputError, PassivityError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
-from vfmodel.fitting.defaults import ENFORCE_ITERATIONS
+from vfmodel.fitting.defaults import ENFORCE_ITERATIONS, ENFORCE_TIME_LIMIT
 from vfmodel.fitting.foster import backward_reflections
 from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
 from vfmodel.fitting.passive_relocation import relocate_passive
@@ -108,6 +109,7 @@ def run_fit(
     dc: DcMode = "enforce",
     enforce_iterations: int = ENFORCE_ITERATIONS,
     enforce_margin: float | None = None,
+    enforce_time_limit: float | None = ENFORCE_TIME_LIMIT,
 ) -> FitJobResult:
     """Fit, then check (and with ``passive`` enforce) passivity of Z, Y and S models.
 
@@ -119,7 +121,9 @@ def run_fit(
     data (floor above 5 %) are refused, and an enforcement that finds no certificate is
     reported as an :class:`InputError` naming the options that control it.
     ``enforce_margin`` None: 1e-6, or a tenth of max(fit error, data floor) when that is
-    smaller, at least 1e-10 (:func:`enforce_margin_for`).
+    smaller, at least 1e-10 (:func:`enforce_margin_for`). ``enforce_time_limit``: seconds
+    after the first enforcement from which the retries start no further enforcement (None
+    or 0: no limit); a model kept because of it carries a note saying so.
     """
     data = combine_spectra(spectra, kind)
     art: DataArtifacts | None = None
@@ -184,17 +188,25 @@ def run_fit(
             # change is at least of the order of the margin: a fit exact to 1e-15 cannot
             # be enforced within 1.2x of it, and retrying cost 11 s on a 2-pole capacitor)
             bound = max(_ENFORCE_RATIO * max(unconstrained_rel, floor), 2 * margin)
-            if retry and data.n_in <= _EXTRA_POLES_PORTS and \
-                    (first is None or fit_errors(first[0], data)[1] > bound):
+            clock = _RetryClock(enforce_time_limit)
+
+            def wanted(first: tuple[RationalModel, PassivityReport, FitReport] | None
+                       ) -> bool:
+                return (first is None or fit_errors(first[0], data)[1] > bound) \
+                    and not clock.out()
+            if retry and data.n_in <= _EXTRA_POLES_PORTS and wanted(first):
                 first = _extra_poles_retry(model, data, first, report, enforce, first_iter)
-            if retry and (first is None or fit_errors(first[0], data)[1] > bound):
+            if retry and wanted(first):
                 first = _out_of_band_retry(data, first, fit_kw, enforce,
-                                           enforce_iterations, bound)
+                                           enforce_iterations, bound, clock)
             if retry and data.n_in <= _RELOCATE_PORTS and \
-                    data.n_in**2 * model.n_poles <= _RELOCATE_UNKNOWNS and \
-                    (first is None or fit_errors(first[0], data)[1] > bound):
+                    data.n_in**2 * model.n_poles <= _RELOCATE_UNKNOWNS and wanted(first):
                 first = _relocation_retry(model, data, first, report, enforce,
-                                          first_iter, bound)
+                                          first_iter, bound, clock)
+            if first is not None and clock.stopped:
+                note = clock.note(fit_errors(first[0], data)[1], bound)
+                warnings.warn(note, FitWarning, stacklevel=3)
+                first = (first[0], first[1], replace(first[2], notes=(*first[2].notes, note)))
             if first is None:
                 raise InputError(
                     f"passivity enforcement found no certificate: {failure}",
@@ -219,6 +231,27 @@ def run_fit(
     prms, pmax = point_errors(model, data)
     report = replace(report, point_rel_rms_error=prms, point_rel_max_error=pmax)
     return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
+
+
+class _RetryClock:
+    """The time limit of the enforcement retries (``run_fit(enforce_time_limit=)``):
+    started after the first enforcement; :meth:`out` is True once it has passed (and
+    remembers that a retry was cut)."""
+
+    def __init__(self, limit: float | None) -> None:
+        self.limit = float(limit) if limit else None
+        self.deadline = None if self.limit is None else time.monotonic() + self.limit
+        self.stopped = False
+
+    def out(self) -> bool:
+        if self.deadline is not None and time.monotonic() > self.deadline:
+            self.stopped = True
+        return self.stopped
+
+    def note(self, err: float, bound: float) -> str:
+        return (f"passivity enforcement retries stopped at the time limit ({self.limit:g} s "
+                f"after the first enforcement; --enforce-time-limit): enforced error "
+                f"{err:.3g}" + (f" against the bound {bound:.3g}" if err > bound else ""))
 
 
 Enforce = Callable[..., tuple[RationalModel, PassivityReport]]
@@ -312,6 +345,7 @@ def _relocation_retry(
     enforce: Enforce,
     max_iter: int,
     bound: float,
+    clock: _RetryClock,
 ) -> tuple[RationalModel, PassivityReport, FitReport] | None:
     """Relocate the poles against the enforced model out of band and enforce again
     (:func:`vfmodel.fitting.passive_relocation.relocate_passive`); keep the passive model
@@ -334,9 +368,12 @@ def _relocation_retry(
     if first is None or data.n_in <= _EXTRA_POLES_PORTS:
         starts.append(None)
     for start in starts:
+        if clock.out():
+            break
         found = relocate_passive(model, data, passive, rounds=_RELOCATE_ROUNDS,
                                  out_weight=_RELOCATE_WEIGHT, good_enough=bound,
-                                 initial=start)
+                                 initial=start, deadline=clock.deadline)
+        clock.out()  # a relocation cut by the deadline is a retry stopped
         if found is not None and found[1] < best_err:
             check = check_passivity(found[0])
             if check.passive:
@@ -357,6 +394,7 @@ def _out_of_band_retry(
     enforce: Enforce,
     max_iter: int,
     bound: float,
+    clock: _RetryClock,
 ) -> tuple[RationalModel, PassivityReport, FitReport] | None:
     """Refit an S model with stronger out-of-band anchors and enforce again; keep the
     passive model closest to the data. Out-of-band excursions of a narrow-band fit (|S| of
@@ -365,6 +403,8 @@ def _out_of_band_retry(
     best = first
     best_err = np.inf if first is None else fit_errors(first[0], data)[1]
     for wgt in _OOB_WEIGHTS:
+        if clock.out():
+            break
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FitWarning)
             model, report = vector_fit(data, out_of_band_weight=wgt, **fit_kw)
