@@ -119,7 +119,7 @@ def _margin_at(margin: float, anchored: bool, floor: float) -> float:
     fit into the noise (scikit-rf's auto_fit adds poles while they pay). Session 32, on 34
     public files never seen before (with the unbiased noise estimate): 1.25 left a loop
     antenna (LivingRoom_10m310322.s1p) at 1.48x scikit-rf's error, 1.1 at 1.00x; five
-    more fits took 1-5 poles more and ended 3-33 % lower. Below the
+    more fits took 0-5 poles more and ended 3-33 % lower. Below the
     anchored cap the narrower margin only traded poles against anchor error, 1-3
     relocations more on 5 of the 25 small scikit-rf files (open, ntwk1, ...)."""
     return max(margin, PLATEAU_MARGIN) if anchored and floor < _CAPPED else margin
