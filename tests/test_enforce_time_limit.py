@@ -7,10 +7,12 @@ import json
 import shutil
 from pathlib import Path
 
+import pytest
 import skrf
 
 from tests._adversarial import run_cli
 from vfmodel.cli.cmd_fit import fit
+from vfmodel.errors import InputError
 from vfmodel.fitting.defaults import ENFORCE_TIME_LIMIT
 from vfmodel.pipeline.fit_job import run_fit
 
@@ -53,3 +55,12 @@ def test_cli_option(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     bad = run_cli(capsys, ["fit", str(src), "--enforce-time-limit", "-1",
                            "--out", str(tmp_path / "p")])
     assert bad.code == 2 and "--enforce-time-limit" in bad.err
+    nan = run_cli(capsys, ["fit", str(src), "--enforce-time-limit", "nan",
+                           "--out", str(tmp_path / "q")])
+    assert nan.code == 2 and "enforce_time_limit" in nan.err
+    assert not (tmp_path / "q").exists()
+
+
+def test_negative_limit_refused() -> None:
+    with pytest.raises(InputError, match="enforce_time_limit"):
+        run_fit(DELAY_SHORT, passive=True, enforce_time_limit=-5.0)

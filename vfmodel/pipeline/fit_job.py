@@ -125,6 +125,9 @@ def run_fit(
     after the first enforcement from which the retries start no further enforcement (None
     or 0: no limit); a model kept because of it carries a note saying so.
     """
+    if enforce_time_limit is not None and not enforce_time_limit >= 0:  # NaN too
+        raise InputError("enforce_time_limit must be a number of seconds >= 0 (0: no limit)",
+                         found=repr(enforce_time_limit), expected="seconds >= 0, or None")
     data = combine_spectra(spectra, kind)
     art: DataArtifacts | None = None
     spikes: tuple[int, ...] = ()
