@@ -57,7 +57,7 @@ def test_cli_option(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     assert bad.code == 2 and "--enforce-time-limit" in bad.err
     nan = run_cli(capsys, ["fit", str(src), "--enforce-time-limit", "nan",
                            "--out", str(tmp_path / "q")])
-    assert nan.code == 2 and "enforce_time_limit" in nan.err
+    assert nan.code == 2 and "--enforce-time-limit" in nan.err
     assert not (tmp_path / "q").exists()
 
 

@@ -107,6 +107,9 @@ def fit(spectra: tuple[Path, ...], order: str, kind: str | None, weighting: str,
     import re
 
     n_order = _order(order)
+    if not enforce_time_limit >= 0:  # click's FloatRange lets NaN through
+        raise click.BadParameter(f"{enforce_time_limit!r}: expected seconds >= 0 "
+                                 "(0: no limit)", param_hint="--enforce-time-limit")
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.\-]*", subckt_name):
         raise click.BadParameter(f"{subckt_name!r}: expected a SPICE name (letters, digits, "
                                  "_ . -, starting with a letter or _)",
