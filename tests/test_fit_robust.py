@@ -398,10 +398,12 @@ def test_noise_free_file_as_accurate_as_scikit_rf(name: str) -> None:
     data = read_spectrum(SKRF_DATA / name).to_kind("S")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model, rep = vector_fit(data, delay="auto")
+        _, rep = vector_fit(data, delay="auto")
     assert rep.rel_rms_error <= max(1.1 * _skrf_auto_fit_error(name, data), 1e-9)
-    anchored, _ = vector_fit(data, delay="auto", out_of_band_weight=1e-4)
-    assert model.n_poles == anchored.n_poles
+    # reference: the same fit held by the anchors to the end (no lighter relocation, the
+    # order's one-pole-less trials judged in the anchored problem): at least as accurate
+    _, anchored = vector_fit(data, delay="auto", out_of_band_weight=1e-4)
+    assert rep.rel_rms_error <= anchored.rel_rms_error
 
 
 def test_turning_reflection_is_not_a_plateau(tmp_path: Path) -> None:
@@ -473,3 +475,16 @@ def test_values_whose_squares_overflow_are_refused(tmp_path: Path) -> None:
                                1e90 * np.array([1.0, -1 + 1j, 1.0, 0.5, 0.3 + 0.1j])), kind="Z")
     model, _ = vector_fit(big)
     assert np.all(np.isfinite(model(f)))
+
+
+def test_lighter_fit_keeps_the_poles_the_anchors_cannot_judge() -> None:
+    # wr1p5,line.s2p (simulated waveguide line, noise-free): below the anchors' cap the
+    # one-pole-less trials judged 10 poles as good as 13 (anchored errors near 2e-7); the
+    # lighter relocation of the 13 reaches 1.3e-9. Reference: scikit-rf's auto_fit on the
+    # same file (8.8e-6); the fit must be 100x better (before: 2.1e-7, 41x)
+    name = "wr1p5,line.s2p"
+    data = read_spectrum(SKRF_DATA / name).to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, rep = vector_fit(data, delay="auto")
+    assert rep.rel_rms_error <= 0.01 * _skrf_auto_fit_error(name, data)
