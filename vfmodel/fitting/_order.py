@@ -364,6 +364,9 @@ def auto_order(
     ``finish`` (an S fit's lighter out-of-band control) relocates the chosen poles once
     more in its own problem; when it keeps that relocation, the final relocation in
     ``prob`` is not made (it would be undone: 1-4 relocations of a small noise-free fit).
+    Below the anchored cap it is tried before the one-pole-less trials (which judge poles
+    by the anchors' errors there), and its fit is pruned by its own error; the trials run
+    only when it is not kept.
     """
     noise = estimate_noise(prob) if target is None else target / margin
     # no measurable noise floor: the order grows until adding poles stops paying

@@ -9,14 +9,15 @@ against 5.8e-10, open.s2p 8.6e-7 against 1.2e-10).
 
 Once the automatic order (or the given order) is reached, the poles are relocated once
 more at that order, from where they are, with both weights scaled down by 1e-6 (the
-order and the order decision stay as they are); when kept, this relocation replaces the
-automatic order's final one (``auto_order(finish=)``). It is tried only when the anchored
-fit's weighted error is below 1e-5, and kept only when it cuts the weighted error by
-at least ``_GAIN`` and its out-of-band gain -- the largest singular value at 0 Hz, at
-the anchor frequencies and of D -- does not exceed the anchored fit's (or the data's
-largest, or 1) by more than ``_SLACK``: measured data, whose error is the noise, keep
-the anchored fit, and a lighter fit that leaves the data's size out of band
-(coaxial.s2p: a gain of 2.5 against 1.0016) is not taken.
+order decision of the growth stays as it is); when kept, this relocation replaces the
+automatic order's final one (``auto_order(finish=)``); below the anchored cap it comes
+before the one-pole-less trials, which then run only when it is not kept. It is tried
+only when the anchored fit's weighted error is below 1e-5, and kept only when it cuts
+the weighted error by at least ``_GAIN`` and its out-of-band gain -- the largest
+singular value at 0 Hz, at the anchor frequencies and of D -- does not exceed the
+anchored fit's (or the data's largest, or 1) by more than ``_SLACK``: measured data,
+whose error is the noise, keep the anchored fit, and a lighter fit that leaves the
+data's size out of band (coaxial.s2p: a gain of 2.5 against 1.0016) is not taken.
 Measured (poles relocated, 1-18 iterations, 1-6 ms): ntwk1.s2p 8.1e-8 -> 5.9e-10,
 open.s2p 8.6e-7 -> 3.2e-10, short.s2p 8.3e-8 -> 4.8e-9, line.s2p 1.0e-7 -> 6.7e-8
 with sigma(D) 1.0088 -> 1.0005.
