@@ -119,9 +119,9 @@ def _margin_at(margin: float, anchored: bool, floor: float) -> float:
     fit into the noise (scikit-rf's auto_fit adds poles while they pay). Session 32, on 34
     public files never seen before (with the unbiased noise estimate): 1.25 left a loop
     antenna (LivingRoom_10m310322.s1p) at 1.48x scikit-rf's error, 1.1 at 1.00x; five
-    more fits took 0-5 poles more and ended 3-33 % lower. Below the
-    anchored cap the narrower margin only traded poles against anchor error, 1-3
-    relocations more on 5 of the 25 small scikit-rf files (open, ntwk1, ...)."""
+    more fits took 0-5 poles more and ended 3-33 % lower. Below the anchored cap the
+    narrower margin only traded poles against anchor error, 1-3 relocations more on 5 of
+    the 25 small scikit-rf files (open, ntwk1, ...)."""
     return max(margin, PLATEAU_MARGIN) if anchored and floor < _CAPPED else margin
 
 
@@ -502,8 +502,8 @@ def auto_order(
     # short.s2p 4.9e-9 -> 3.5e-9, wr2p2,delayshort 5.3e-8 -> 5.7e-8 (scikit-rf 1.5e-4);
     # ntwk1, open, ind and line no longer spend 2 relocations on a trial that fails
     at_cap = anchored and finish is not None and limit < margin * _CAPPED  # floor < cap
-    took = finish(coef) if at_cap and finish is not None else None
-    tried_finish = coef if at_cap else None
+    took = finish(coef) if at_cap and finish is not None else None  # (finish: for mypy)
+    tried_finish = coef if at_cap else None  # finish(coef) was tried and not kept
     for _ in range(0 if took is not None else _REDUCE_TRIALS):  # one pole less, relocated
         if coef.reps.size <= 1:
             break
