@@ -424,6 +424,16 @@ def test_turning_reflection_is_not_a_plateau(tmp_path: Path) -> None:
     assert rep.rel_rms_error <= 1.1 * ref, rep.order_reason
 
 
+def _auto_fit_and_skrf(name: str) -> tuple[float, float]:
+    """Relative RMS errors of vfmodel's default S fit (``delay="auto"``) of scikit-rf's
+    file ``name`` and of scikit-rf's ``auto_fit`` of it."""
+    data = read_spectrum(SKRF_DATA / name).to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, rep = vector_fit(data, delay="auto")
+    return rep.rel_rms_error, _skrf_auto_fit_error(name, data)
+
+
 def test_plateau_pick_of_fewer_poles_is_converged_first() -> None:
     # wr2p2,line1.s2p (noise-free, 101 points): the growth plateaus at the best error of
     # unconverged steps (~2.9e-6) and the smallest order within 1.25x of it was kept, 8
@@ -431,12 +441,8 @@ def test_plateau_pick_of_fewer_poles_is_converged_first() -> None:
     # the margin and becomes the floor: 9 poles at 9.0e-7 (Haswell, Prescott and
     # Sandybridge kernels). Reference: scikit-rf's auto_fit on the same file (8.2e-7),
     # within the order rule's own margin (1.25x of the floor it reaches).
-    name = "wr2p2,line1.s2p"
-    data = read_spectrum(SKRF_DATA / name).to_kind("S")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        _, rep = vector_fit(data, delay="auto")
-    assert rep.rel_rms_error <= 1.25 * _skrf_auto_fit_error(name, data)
+    err, ref = _auto_fit_and_skrf("wr2p2,line1.s2p")
+    assert err <= 1.25 * ref
 
 
 def test_lighter_fit_not_taken_when_it_leaves_the_data_size() -> None:
@@ -482,9 +488,5 @@ def test_lighter_fit_keeps_the_poles_the_anchors_cannot_judge() -> None:
     # one-pole-less trials judged 10 poles as good as 13 (anchored errors near 2e-7); the
     # lighter relocation of the 13 reaches 1.3e-9. Reference: scikit-rf's auto_fit on the
     # same file (8.8e-6); the fit must be 100x better (before: 2.1e-7, 41x)
-    name = "wr1p5,line.s2p"
-    data = read_spectrum(SKRF_DATA / name).to_kind("S")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        _, rep = vector_fit(data, delay="auto")
-    assert rep.rel_rms_error <= 0.01 * _skrf_auto_fit_error(name, data)
+    err, ref = _auto_fit_and_skrf("wr1p5,line.s2p")
+    assert err <= 0.01 * ref
