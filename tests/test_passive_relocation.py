@@ -83,3 +83,32 @@ def test_relocation_beats_fixed_poles() -> None:
     assert err < 0.5 * fixed_err
     assert err < 2.0 * fit_err
     assert _dense_sigma(passive, data.freq_hz) <= 1 + 1e-9
+
+
+def test_stop_is_asked_only_before_a_further_round() -> None:
+    # the time limit of fit --passive reports a cut when its stop() answers True: it must
+    # be asked only where another round (an enforcement) would start. Reference: call
+    # counts of a stand-in enforcement that returns the model as it is
+    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, _ = vector_fit(data, order=8)
+    enforced: list[int] = []
+    asked: list[int] = []
+
+    def enforce(m: RationalModel) -> RationalModel | None:
+        enforced.append(1)
+        return m
+
+    def stop() -> bool:
+        asked.append(1)
+        return True
+
+    found = relocate_passive(model, data, enforce, rounds=4, stop=stop)
+    assert found is not None and found[0] is model
+    assert (len(enforced), len(asked)) == (1, 1)
+    # done after the first round (good enough): no round was cut, stop() is not asked
+    enforced.clear()
+    asked.clear()
+    relocate_passive(model, data, enforce, rounds=4, good_enough=np.inf, stop=stop)
+    assert (len(enforced), len(asked)) == (1, 0)

@@ -69,11 +69,7 @@ _REDUCE_TRIALS = 2  # one-pole-less trials after pruning (each continues only on
 _SEED_DAMPING = 0.03  # damping ratio of re-seeded pairs
 _TRIAL_TOL = 0.01  # relative error change that ends a trial
 _TRIAL_ITERATIONS = 4  # relocations of a one-pole-less trial at most
-_FINAL_PATIENCE = 2  # relocations without improvement that end a trial
-# ... that end the last relocation of the model kept (its best is kept): one relocation
-# less on each noisy fit; of the 70 vfbench, scikit-rf and unseen fits of session 32 two
-# ended higher (sucoflex290mm 0.5 %, tl_50cm_open 8 %, 0.71x scikit-rf's error)
-_LAST_PATIENCE = 1
+_FINAL_PATIENCE = 2  # relocations without improvement that end a trial or the final fit
 _WINDOW = 11  # samples of the local median of the noise estimator
 # RMS of the local-median estimates over the true sigma for white Gaussian noise, per
 # difference order (window of 11): the median of 11 correlated samples scatters, and the
@@ -355,11 +351,12 @@ def auto_order(
     the roughness of the residual) and, when the error stops improving (steps adding a
     quarter of the order gain less than 10 %; half of it while the error is above 1 %,
     :func:`_patience`), the best error reached. The chosen model is the smallest tried order
-    within 25 % of the floor. Poles are then removed by backward elimination while the
-    error stays within that bound; trials of one pole less (re-seeded, relocated) continue
-    while they stay within it. The model kept is relocated to convergence unless it came
-    from a converged trial. With ``target`` the floor is ``target / 1.25`` instead of the
-    noise estimate (the order stops at the requested error).
+    within ``margin`` (at the noise floor) or ``plateau_margin`` (otherwise) of the floor.
+    Poles are then removed by backward elimination while the error stays within that
+    bound; trials of one pole less (re-seeded, relocated) continue while they stay within
+    it. The model kept is relocated to convergence unless it came from a converged trial.
+    With ``target`` the floor is ``target / margin`` instead of the noise estimate (the
+    order stops at the requested error).
 
     ``finish`` (an S fit's lighter out-of-band control) relocates the chosen poles once
     more in its own problem; when it keeps that relocation, the final relocation in
@@ -554,7 +551,7 @@ def auto_order(
             tol=tol,
             stable=stable,
             precise=None,
-            patience=_LAST_PATIENCE,
+            patience=_FINAL_PATIENCE,
             err_hint=now,
         )
         n_it += final.n_iterations

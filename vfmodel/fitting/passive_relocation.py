@@ -31,7 +31,6 @@ References
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -71,7 +70,7 @@ def relocate_passive(
     out_weight: float = 0.1,
     good_enough: float = 0.0,
     initial: RationalModel | None = None,
-    deadline: float | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> tuple[RationalModel, float] | None:
     """The passive model closest to ``data`` (relative RMS error) over ``rounds`` rounds
     of enforcement and relocation (module docstring), with its error; None when no
@@ -81,8 +80,8 @@ def relocate_passive(
     enforcement of a model (None on failure), e.g. ``enforce_passivity`` with the fit
     job's margin. ``initial``: a passive model of the data (e.g. an earlier enforcement)
     whose response gives the first targets instead of the enforcement of ``model`` (which
-    can fail or take minutes). ``deadline`` (``time.monotonic()``): no round starts after
-    it (the best so far is returned).
+    can fail or take minutes). ``stop``: asked before each further round; True ends the
+    rounds (the best so far is returned; e.g. a time limit that records the cut).
     """
     tau = float(model.delay or 0.0)
     f = data.freq_hz
@@ -112,7 +111,7 @@ def relocate_passive(
             if best is None or err < best[1]:
                 best = (passive, err)
         if k == rounds or passive is None or (best is not None and best[1] <= good_enough) \
-                or (deadline is not None and time.monotonic() > deadline):
+                or (stop is not None and stop()):
             break
         targets = passive.without_delay()(grid).reshape(grid.size, -1) if tau else \
             passive(grid).reshape(grid.size, -1)

@@ -238,8 +238,9 @@ def run_fit(
 
 class _RetryClock:
     """The time limit of the enforcement retries (``run_fit(enforce_time_limit=)``):
-    started after the first enforcement; :meth:`out` is True once it has passed (and
-    remembers that a retry was cut)."""
+    started after the first enforcement; :meth:`out` is True once it has passed. It is
+    asked only where a further enforcement would start, so a True answer is a retry cut
+    (``stopped``, which the fit note reports)."""
 
     def __init__(self, limit: float | None) -> None:
         self.limit = float(limit) if limit else None
@@ -375,8 +376,7 @@ def _relocation_retry(
             break
         found = relocate_passive(model, data, passive, rounds=_RELOCATE_ROUNDS,
                                  out_weight=_RELOCATE_WEIGHT, good_enough=bound,
-                                 initial=start, deadline=clock.deadline)
-        clock.out()  # a relocation cut by the deadline is a retry stopped
+                                 initial=start, stop=clock.out)
         if found is not None and found[1] < best_err:
             check = check_passivity(found[0])
             if check.passive:
