@@ -214,7 +214,7 @@ def _vf_case(path: Path, runs: int) -> dict[str, Any]:
                    small=small, job_time=t)
         dp = data_passivity(res.data)
         row["floor"] = dp.floor if dp is not None else None
-        row["model_data"] = (res.data.freq_hz, res.data.values)
+        row["model_data"] = (res.data.freq_hz, res.data.values, res.data.z0)
         if dp is not None and dp.active:
             row["note"] = f"active data (floor {dp.floor:.2g}): enforcement refused"
             return row
@@ -248,6 +248,7 @@ def main() -> int:
     args = _args()
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"
+    import numpy as np
     import skrf
 
     sys.path.insert(0, str(ROOT))
@@ -273,6 +274,8 @@ def main() -> int:
         if md is not None:
             try:
                 net = skrf.Network(str(path))
+                if not np.allclose(net.z0, md[2]):  # vfmodel renormalised: the same data
+                    net.renormalize(md[2])
                 runs = args.runs if vf.get("small") else 1
                 sk = _skrf_case(net, runs, not args.no_skrf_passive, md[0], md[1],
                                 args.skrf_limit)

@@ -78,18 +78,6 @@ def test_per_port_references_are_renormalised_to_port_1(tmp_path: Path) -> None:
     assert np.max(np.abs(data.values - ref)) < 1e-8
 
 
-def test_complex_per_port_reference_is_refused(tmp_path: Path) -> None:
-    from vfmodel.core.frequency_data import FrequencyData
-    from vfmodel.errors import InputError
-
-    skrf = pytest.importorskip("skrf")
-    net = skrf.Network(frequency=skrf.Frequency.from_f(F_HZ[:5], unit="Hz"),
-                       s=cascade_s(F_HZ[:5], LINES, 500e-12, 50.0, 50.0),
-                       z0=np.array([50.0, 50.0 + 5j]))
-    with pytest.raises(InputError, match="real, positive, frequency-independent"):
-        FrequencyData.from_network(net)
-
-
 @pytest.mark.parametrize("z_lines, z02, delay", [
     ((50.0, 100.0, 50.0), 50.0, 480e-12),    # before: 58 poles at 6.9 %
     ((50.0, 90.0, 50.0), 50.0, 480e-12),     # 49 poles at 5.0 %

@@ -288,17 +288,20 @@ def as_frequency_data(
 
 def _common_reference(network: skrf.Network, z0s: NDArray[Any], kind: str, src: str
                       ) -> tuple[skrf.Network, complex]:
-    """A network whose ports have different real reference impedances (Touchstone 2's
-    ``[Reference]``): Z and Y do not depend on them; S is renormalised to port 1's (with
-    scikit-rf, a :class:`~vfmodel.errors.VfmodelWarning` says so). Complex or
-    frequency-dependent references are refused."""
+    """A network whose ports have different reference impedances: Z and Y do not depend
+    on them; S is renormalised with scikit-rf (its wave definition, ``network.s_def``) to
+    port 1's when they are real and constant (Touchstone 2's ``[Reference]``, Touchstone
+    1.1's ``R`` per port), else -- complex or frequency-dependent, e.g. the ``! Port
+    Impedance`` comments of an HFSS export -- to 50 ohm, Touchstone's default reference;
+    a :class:`~vfmodel.errors.VfmodelWarning` says so. References that are not finite or
+    whose real part is not positive are refused."""
     per_port = z0s.reshape(-1, z0s.shape[-1])
-    if not (np.all(np.isfinite(per_port)) and np.all(per_port.imag == 0)
-            and np.all(per_port.real > 0) and np.allclose(per_port, per_port[:1])):
+    if not (np.all(np.isfinite(per_port)) and np.all(per_port.real > 0)):
         raise InputError(
-            "only real, positive, frequency-independent reference impedances are supported",
+            "reference impedances must be finite with a positive real part",
             source=src, found=f"z0 values {np.unique(z0s)[:4]}")
-    ref = float(per_port[0, 0].real)
+    constant = bool(np.all(per_port.imag == 0) and np.allclose(per_port, per_port[:1]))
+    ref = float(per_port[0, 0].real) if constant else _DEFAULT_Z0
     if kind != "S":
         return network, complex(ref)
     import warnings
@@ -309,8 +312,22 @@ def _common_reference(network: skrf.Network, z0s: NDArray[Any], kind: str, src: 
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         out.renormalize(ref)
-    ports = ", ".join(f"{v:g}" for v in per_port[0].real)
-    warnings.warn(f"{src}: the ports' reference impedances differ ({ports} ohm); the "
-                  f"S-parameters are renormalised to port 1's {ref:g} ohm, the model's z0",
-                  VfmodelWarning, stacklevel=3)
+    if not np.all(np.isfinite(out.s)):
+        raise InputError("the S-parameters cannot be renormalised to a common reference "
+                         f"impedance of {ref:g} ohm (not finite)", source=src,
+                         found=f"z0 values {np.unique(z0s)[:4]}")
+    if constant:
+        ports = ", ".join(f"{v:g}" for v in per_port[0].real)
+        warnings.warn(f"{src}: the ports' reference impedances differ ({ports} ohm); the "
+                      f"S-parameters are renormalised to port 1's {ref:g} ohm, the model's "
+                      "z0", VfmodelWarning, stacklevel=3)
+    else:
+        lo, hi = float(np.min(np.abs(per_port))), float(np.max(np.abs(per_port)))
+        warnings.warn(f"{src}: the ports' reference impedances are complex or vary with "
+                      f"frequency (|z0| {lo:.4g}-{hi:.4g} ohm, e.g. an HFSS export's port "
+                      f"impedances); the S-parameters are renormalised to {ref:g} ohm, the "
+                      "model's z0", VfmodelWarning, stacklevel=3)
     return out, complex(ref)
+
+
+_DEFAULT_Z0 = 50.0  # common reference for complex or frequency-dependent port references

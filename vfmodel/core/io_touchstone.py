@@ -49,13 +49,22 @@ class OptionLine:
     def __init__(self, unit: str = "GHZ", param: str = "S", fmt: str = "MA",
                  r_ohm: float = 50.0) -> None:
         self.unit, self.param, self.fmt, self.r_ohm = unit, param, fmt, r_ohm
+        # Touchstone 1.1 (and scikit-rf) allow one R per port: all of them when more
+        # than one is given
+        self.r_ports: tuple[float, ...] = ()
 
     @property
     def mult(self) -> float:
         return _UNITS[self.unit]
 
+    @property
+    def per_port(self) -> bool:
+        """Different reference resistances per port (``R 50 50 100``)."""
+        return len(set(self.r_ports)) > 1
+
     def canonical(self) -> str:
-        return f"# {self.unit} {self.param} {self.fmt} R {self.r_ohm:.17g}"
+        rs = self.r_ports or (self.r_ohm,)
+        return f"# {self.unit} {self.param} {self.fmt} R " + " ".join(f"{r:.17g}" for r in rs)
 
 
 def parse_option_line(line: str, src: str, place: str) -> OptionLine:
@@ -89,10 +98,20 @@ def parse_option_line(line: str, src: str, place: str) -> OptionLine:
                                  place=place, found=toks[k][:20],
                                  expected="a positive number of ohms")
             opt.r_ohm = r
+            more = [r]
+            while k + 1 < len(toks) and _is_float(toks[k + 1]):  # one R per port (1.1)
+                k += 1
+                more.append(float(toks[k]))
+                if not (math.isfinite(more[-1]) and more[-1] > 0):
+                    raise InputError("option line: bad reference resistance", source=src,
+                                     place=place, found=toks[k][:20],
+                                     expected="a positive number of ohms")
+            opt.r_ports = tuple(more) if len(more) > 1 else ()
         else:
             raise InputError("option line: unknown field", source=src, place=place,
                              found=repr(toks[k][:20]),
-                             expected="Hz/kHz/MHz/GHz, S/Y/Z/G/H, DB/MA/RI and 'R <ohms>'")
+                             expected="Hz/kHz/MHz/GHz, S/Y/Z/G/H, DB/MA/RI and 'R <ohms>' "
+                             "(or one R per port)")
         if field in seen:
             raise InputError(f"option line: {field} given twice", source=src, place=place)
         seen.add(field)
@@ -178,11 +197,20 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
             cur = 0
     if opt is None:
         raise InputError("no Touchstone option line", source=src, expected=_NO_OPTION)
+    if opt.r_ports and len(opt.r_ports) != n:
+        raise InputError("option line: one R per port or one R for all", source=src,
+                         found=f"{len(opt.r_ports)} values after R",
+                         expected=f"1 or {n} (the file's ports)")
     if cur != 0:
         raise InputError(f"last row incomplete for a {n}-port file", source=src,
                          found=f"{cur} numbers", expected=f"{per_row}")
     if len(data) == 0:
         raise InputError("Touchstone file has no data points", source=src)
+    if opt.per_port or _hfss_references_differ(lines, opt.r_ohm):
+        # references per port or per frequency (HFSS's "! Port Impedance" comments): read
+        # by scikit-rf, which knows their wave definitions, then renormalised to a common
+        # reference (FrequencyData.from_network, with a warning)
+        return _read_with_skrf(_canonical_text(lines, opt), opt, f"data.s{n}p", src)
     table = np.frombuffer(data, dtype=float).reshape(-1, per_row)
     a, b = table[:, 1::2], table[:, 2::2]
     with np.errstate(over="ignore", invalid="ignore"):  # overflow refused in _to_data
@@ -226,9 +254,6 @@ def _to_data(freq: np.ndarray, values: np.ndarray, opt: OptionLine, src: str,
 def _read_v2(text: str, src: str) -> FrequencyData:
     """Touchstone 2.x through scikit-rf (option line made canonical first; Z/Y data of
     version 2 are not normalised)."""
-    import skrf
-    from skrf.io.touchstone import Touchstone
-
     out, opt = [], None
     for k, raw in enumerate(text.splitlines(), start=1):
         s = raw.split("!", 1)[0].strip()
@@ -241,18 +266,59 @@ def _read_v2(text: str, src: str) -> FrequencyData:
     if opt is None:
         opt = OptionLine()
     _check_reference(text, src)
-    fid = io.StringIO("\n".join(out) + "\n")
-    fid.name = Path(src).name if Path(src).suffix.lower() == ".ts" else "data.ts"
+    return _read_with_skrf("\n".join(out), opt,
+                           Path(src).name if Path(src).suffix.lower() == ".ts" else "data.ts",
+                           src)
+
+
+def _canonical_text(lines: list[str], opt: OptionLine) -> str:
+    """The lines with the (first) option line written in scikit-rf's field order."""
+    out, done = [], False
+    for raw in lines:
+        if not done and raw.split("!", 1)[0].strip().startswith("#"):
+            out.append(opt.canonical())
+            done = True
+        else:
+            out.append(raw)
+    return "\n".join(out)
+
+
+_HFSS_Z0 = re.compile(r"^\s*!\s*port\s+impedance", re.IGNORECASE)
+
+
+def _hfss_references_differ(lines: list[str], r_ohm: float) -> bool:
+    """True when an HFSS export's ``! Port Impedance`` comments (real and imaginary part
+    per port and frequency) give references other than the option line's R (scikit-rf's
+    files write 50 0 there for R 50)."""
+    for raw in lines:
+        m = _HFSS_Z0.match(raw)
+        if m is None:
+            continue
+        vals = [float(t) for t in raw[m.end():].split() if _is_float(t)]
+        if any(abs(v - (r_ohm if k % 2 == 0 else 0.0)) > 1e-12 * r_ohm
+               for k, v in enumerate(vals)):
+            return True
+    return False
+
+
+def _read_with_skrf(text: str, opt: OptionLine, name: str, src: str) -> FrequencyData:
+    """Touchstone ``text`` (option line canonical) read by scikit-rf as ``name`` (its
+    suffix tells the version and ports), as ``opt.param`` data."""
+    import skrf
+    from skrf.io.touchstone import Touchstone
+
+    fid = io.StringIO(text + "\n")
+    fid.name = name
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
             ts = Touchstone(fid)
             net = skrf.Network(frequency=skrf.Frequency.from_f(ts.f, unit="hz"), s=ts.s,
-                               z0=ts.z0)
+                               z0=ts.z0, s_def=ts.s_def or "power")
     except InputError:
         raise
     except Exception as err:  # scikit-rf raises many types on malformed files
-        raise InputError(f"not a readable Touchstone 2 file ({type(err).__name__})",
+        raise InputError(f"not a readable Touchstone file ({type(err).__name__})",
                          source=src) from None
     if net.f.size == 0:
         raise InputError("Touchstone file has no data points", source=src)
