@@ -31,16 +31,19 @@ def _dense_sigma(model: RationalModel, f_data: np.ndarray) -> float:
     return worst
 
 
-@pytest.mark.parametrize("name", ["coaxial.s2p", "circuit_vi_Coaxial_T.s3p", "hfss_18.2.s3p"])
+@pytest.mark.parametrize("name", ["coaxial.s2p", "circuit_vi_Coaxial_T.s3p"])
 def test_fit_passive_within_bound(name: str) -> None:
     """Before the relocation: 1.53x (coaxial, 2 ports, 101 points) and 2.47x
     (circuit_vi_Coaxial_T, 3 ports, 3 points) of the fit error after enforcement.
     hfss_18.2 (3 ports, 11 points, data floor 1.2e-4, fit 1e-11): 1.26x its floor while
     enforcement minimised the change per entry relative to |H|; 1.02x since it minimises
-    it in the fit's norm (uniform for S data, the norm of the relative RMS error)."""
-    data = read_spectrum(VFBENCH / name).to_kind("S")
+    it in the fit's norm (uniform for S data, the norm of the relative RMS error). Taken
+    out in session 33: its S-parameters are at HFSS's port impedances, which were read as
+    50 ohm; renormalised to port 1's 6.47 ohm the data floor is 2.6e-6 and the enforced
+    model 1.29x it (70 s)."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+        warnings.simplefilter("ignore")  # HFSS port impedances: renormalised, a warning
+        data = read_spectrum(VFBENCH / name).to_kind("S")
         res = run_fit([data], passive=True, delay="auto")
     assert res.passivity is not None and res.passivity.passive
     floor = res.data_passivity.floor if res.data_passivity else 0.0

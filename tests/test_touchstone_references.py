@@ -40,7 +40,7 @@ def _rows(s: ArrC) -> list[str]:
             for k in range(F_HZ.size)]
 
 
-def test_hfss_port_impedances_are_renormalised_to_50_ohm(tmp_path: Path) -> None:
+def test_hfss_port_impedances_are_renormalised_to_port_1s(tmp_path: Path) -> None:
     # the T network's S at complex, frequency-dependent port impedances (HFSS's
     # default wave definition, as scikit-rf reads such files), written as HFSS does
     z_ports = np.stack([30.0 - 0.4j + 1e-9j * F_HZ, 5.3 - 0.005j + 0 * F_HZ], axis=1)
@@ -54,14 +54,14 @@ def test_hfss_port_impedances_are_renormalised_to_50_ohm(tmp_path: Path) -> None
     path = tmp_path / "hfss.s2p"
     path.write_text("\n".join(lines) + "\n")
     with pytest.warns(VfmodelWarning, match=r"complex or vary with frequency.*renormalised "
-                      r"to 50 ohm"):
+                      r"to port 1's 30 ohm"):
         data = read_spectrum(path)
-    assert data.kind == "S" and data.z0 == 50.0
-    # reference 1: the closed form at 50 ohm
-    assert np.max(np.abs(data.values - _tee(F_HZ, 50.0))) < 1e-12
+    assert data.kind == "S" and data.z0 == 30.0  # port 1's real part at the lowest frequency
+    # reference 1: the closed form at 30 ohm
+    assert np.max(np.abs(data.values - _tee(F_HZ, 30.0))) < 1e-12
     # reference 2: scikit-rf reading and renormalising the file
     ref = skrf.Network(str(path))
-    ref.renormalize(50.0)
+    ref.renormalize(30.0)
     assert np.max(np.abs(data.values - ref.s)) < 1e-13
 
 
@@ -99,13 +99,13 @@ def test_one_r_per_port_in_the_option_line(tmp_path: Path) -> None:
 
 def test_complex_reference_of_a_network_is_renormalised() -> None:
     # a scikit-rf Network with a complex port reference (was refused): renormalised to
-    # 50 ohm, equal to the closed form there
+    # port 1's 50 ohm, equal to the closed form there
     from vfmodel.core.frequency_data import FrequencyData
 
     net = skrf.Network(frequency=skrf.Frequency.from_f(F_HZ, unit="Hz"),
                        s=_tee(F_HZ, 50.0), z0=50.0)
     net.renormalize(np.array([50.0, 50.0 + 5j]))
-    with pytest.warns(VfmodelWarning, match="renormalised to 50 ohm"):
+    with pytest.warns(VfmodelWarning, match="renormalised to port 1's 50 ohm"):
         data = FrequencyData.from_network(net)
     assert np.max(np.abs(data.values - _tee(F_HZ, 50.0))) < 1e-12
     bad = net.copy()
