@@ -206,7 +206,7 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
                          found=f"{cur} numbers", expected=f"{per_row}")
     if len(data) == 0:
         raise InputError("Touchstone file has no data points", source=src)
-    if opt.per_port or _hfss_references_differ(lines, opt.r_ohm):
+    if opt.per_port or _hfss_references_differ(lines, opt.r_ohm, n):
         # references per port or per frequency (HFSS's "! Port Impedance" comments): read
         # by scikit-rf, which knows their wave definitions, then renormalised to a common
         # reference (FrequencyData.from_network, with a warning)
@@ -286,17 +286,23 @@ def _canonical_text(lines: list[str], opt: OptionLine) -> str:
 _HFSS_Z0 = re.compile(r"^\s*!\s*port\s+impedance", re.IGNORECASE)
 
 
-def _hfss_references_differ(lines: list[str], r_ohm: float) -> bool:
+def _hfss_references_differ(lines: list[str], r_ohm: float, n: int) -> bool:
     """True when an HFSS export's ``! Port Impedance`` comments (real and imaginary part
-    per port and frequency) give references other than the option line's R (scikit-rf's
-    files write 50 0 there for R 50)."""
+    per port, or a full n x n matrix, per frequency) give references other than the option
+    line's R (scikit-rf's files write 50 0 there for R 50; TouchstoneParser.jl's spiral
+    inductor the matrix 50 0 0 0 0 0 50 0)."""
     for raw in lines:
         m = _HFSS_Z0.match(raw)
         if m is None:
             continue
         vals = [float(t) for t in raw[m.end():].split() if _is_float(t)]
-        if any(abs(v - (r_ohm if k % 2 == 0 else 0.0)) > 1e-12 * r_ohm
-               for k, v in enumerate(vals)):
+        z = np.asarray(vals[0::2], dtype=float) + 1j * np.asarray(vals[1::2], dtype=float)
+        if z.size == n * n and n > 1:  # a matrix: R on the diagonal, zeros elsewhere
+            z = z.reshape(n, n)
+            if np.any(z[~np.eye(n, dtype=bool)] != 0):
+                return True
+            z = np.diag(z)
+        if np.any(np.abs(z - r_ohm) > 1e-12 * r_ohm):
             return True
     return False
 
