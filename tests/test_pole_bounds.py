@@ -21,8 +21,10 @@ def test_real_pole_twenty_times_below_the_band() -> None:
     data = FrequencyData(f, (z - 50) / (z + 50), kind="S", z0=50.0)
     pole_hz = (r1 + 50 + r2) / ((r1 + 50) * r2 * c) / (2 * np.pi)
     model, _ = vector_fit(data)
-    # measured: 1 pole at 0.49972 Hz (the closed form), 3.3e-16; with the bound at f_lo / 10,
-    # 4 poles at 4.0e-6 (one clamped at 1 Hz)
+    # measured: the pole at 0.49972 Hz (the closed form) and 2-4e-16 over five OpenBLAS
+    # kernels (Haswell and Zen add a second pole of no weight at 0.82 Hz); with the bound at
+    # f_lo / 10, 4 poles at 4.0e-6 (one clamped at 1 Hz)
     assert fit_errors(model, data)[1] < 1e-12
-    assert model.n_poles == 1
-    assert abs(abs(model.poles[0]) / (2 * np.pi) - pole_hz) < 1e-8 * pole_hz
+    assert model.n_poles <= 2
+    found = np.abs(model.poles) / (2 * np.pi)
+    assert np.min(np.abs(found - pole_hz)) < 1e-8 * pole_hz
