@@ -37,7 +37,7 @@ def _tee(f_hz: NDArray[np.float64], z0: float) -> ArrC:
 def _rows(s: ArrC) -> list[str]:
     return [f"{F_HZ[k]:.12e} " + " ".join(f"{x.real:+.16e} {x.imag:+.16e}" for x in
                                             (s[k, 0, 0], s[k, 1, 0], s[k, 0, 1], s[k, 1, 1]))
-            for k in range(F_HZ.size)]
+            for k in range(s.shape[0])]
 
 
 def test_hfss_port_impedances_are_renormalised_to_port_1s(tmp_path: Path) -> None:
@@ -66,26 +66,47 @@ def test_hfss_port_impedances_are_renormalised_to_port_1s(tmp_path: Path) -> Non
 
 
 def test_port_impedance_comments_equal_to_r_change_nothing(tmp_path: Path) -> None:
-    # scikit-rf's own files write '! Port Impedance 50 0 ...' beside R 50: read as before
-    lines = ["# HZ S RI R 50"]
-    for row in _rows(_tee(F_HZ, 50.0)):
-        lines += [row, "! Port Impedance 50.0 0.0 50.0 0.0"]
-    path = tmp_path / "plain.s2p"
-    path.write_text("\n".join(lines) + "\n")
-    with_comments = read_spectrum(path)
-    path.write_text("\n".join(x for x in lines if not x.startswith("!")) + "\n")
-    plain = read_spectrum(path)
-    assert np.array_equal(with_comments.values, plain.values)
-    # the same as a full matrix per frequency (R on the diagonal, as TouchstoneParser.jl's
-    # spiral inductor writes it): also R, so vfmodel's own parser reads the file (scikit-rf
-    # rounds MA data differently in the last digit, and that moved the spiral's automatic
-    # order from 56 to 33 poles)
+    # scikit-rf's own files write '! Port Impedance 50 0 ...' beside R 50, as pairs;
+    # TouchstoneParser.jl's spiral inductor as a matrix ('50 0 0 0 0 0 50 0'). Both are R:
+    # vfmodel's own parser reads the file (handed to scikit-rf, the spiral's MA values
+    # rounded differently in the last digit and its automatic order moved from 56 to 33
+    # poles), bit-identical to the file without comments
     from vfmodel.core.io_touchstone import _hfss_references_differ
 
-    matrix = ["! Port Impedance50  0  0  0  0  0  50  0", "1e9 0.1 0 0.9 0 0.9 0 0.1 0"]
-    assert not _hfss_references_differ(matrix, 50.0, 2)
-    assert _hfss_references_differ([matrix[0].replace("50", "30", 1)], 50.0, 2)
-    assert _hfss_references_differ(["! Port Impedance 50 0 50 0.5"], 50.0, 2)
+    rows = _rows(_tee(F_HZ, 50.0))
+    path = tmp_path / "plain.s2p"
+    path.write_text("\n".join(["# HZ S RI R 50", *rows]) + "\n")
+    plain = read_spectrum(path)
+    for comment in ("! Port Impedance 50.0 0.0 50.0 0.0",
+                    "! Port Impedance50  0  0  0  0  0  50  0"):
+        lines = ["# HZ S RI R 50"] + [x for row in rows for x in (row, comment)]
+        assert not _hfss_references_differ(lines, 50.0, 2, F_HZ.size, "x.s2p")
+        path.write_text("\n".join(lines) + "\n")
+        assert np.array_equal(read_spectrum(path).values, plain.values)
+    # other references, or a block wrapped over a continuation line: scikit-rf reads them
+    for block in (["! Port Impedance 30 0 0 0 0 0 50 0"], ["! Port Impedance 50 0 50 0.5"],
+                  ["! Port Impedance 50 0 50", "! 0"]):
+        lines = ["# HZ S RI R 50", rows[0], *block]
+        assert _hfss_references_differ(lines, 50.0, 2, 1, "x.s2p")
+
+
+@pytest.mark.parametrize("blocks, message", [
+    (["50 nan 50 0"], "not finite or has no positive real part"),
+    (["-5 0 50 0"], "not finite or has no positive real part"),
+    (["50 0 50"], "an odd count of numbers"),
+    (["30 -0.4 5.3 0", None], "one block per frequency.*1 blocks for 2 frequencies"),
+])
+def test_bad_port_impedance_comments_are_refused(tmp_path: Path, blocks: list[str | None],
+                                                 message: str) -> None:
+    # scikit-rf failed on these with an AttributeError or a ValueError (exit 2 "not a
+    # readable Touchstone file"); now one message names the line or the counts
+    lines = ["# HZ S RI R 50"]
+    for row, block in zip(_rows(_tee(F_HZ[:2], 50.0)), [*blocks, None][:2], strict=True):
+        lines += [row] + ([] if block is None else [f"! Port Impedance {block}"])
+    path = tmp_path / "bad.s2p"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=message):
+        read_spectrum(path)
 
 
 def test_one_r_per_port_in_the_option_line(tmp_path: Path) -> None:

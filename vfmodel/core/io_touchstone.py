@@ -206,7 +206,7 @@ def _read_v1(lines: list[str], n: int, src: str) -> FrequencyData:
                          found=f"{cur} numbers", expected=f"{per_row}")
     if len(data) == 0:
         raise InputError("Touchstone file has no data points", source=src)
-    if opt.per_port or _hfss_references_differ(lines, opt.r_ohm, n):
+    if opt.per_port or _hfss_references_differ(lines, opt.r_ohm, n, len(data) // per_row, src):
         # references per port or per frequency (HFSS's "! Port Impedance" comments): read
         # by scikit-rf, which knows their wave definitions, then renormalised to a common
         # reference (FrequencyData.from_network, with a warning)
@@ -254,21 +254,22 @@ def _to_data(freq: np.ndarray, values: np.ndarray, opt: OptionLine, src: str,
 def _read_v2(text: str, src: str) -> FrequencyData:
     """Touchstone 2.x through scikit-rf (option line made canonical first; Z/Y data of
     version 2 are not normalised)."""
-    out, opt = [], None
-    for k, raw in enumerate(text.splitlines(), start=1):
+    lines = text.splitlines()
+    opt: OptionLine | None = None
+    for k, raw in enumerate(lines, start=1):
         s = raw.split("!", 1)[0].strip()
         if s.startswith("#"):
-            if opt is None:
-                opt = parse_option_line(s, src, f"line {k}")
-                out.append(opt.canonical())
-            continue
-        out.append(raw)
-    if opt is None:
-        opt = OptionLine()
+            opt = parse_option_line(s, src, f"line {k}")
+            break
     _check_reference(text, src)
-    return _read_with_skrf("\n".join(out), opt,
-                           Path(src).name if Path(src).suffix.lower() == ".ts" else "data.ts",
-                           src)
+    if opt is None:
+        return _read_with_skrf(text, OptionLine(), _v2_name(src), src)
+    return _read_with_skrf(_canonical_text(lines, opt), opt, _v2_name(src), src)
+
+
+def _v2_name(src: str) -> str:
+    """The name scikit-rf sees for Touchstone 2 text: a '.ts' file keeps its own."""
+    return Path(src).name if Path(src).suffix.lower() == ".ts" else "data.ts"
 
 
 def _canonical_text(lines: list[str], opt: OptionLine) -> str:
@@ -286,25 +287,52 @@ def _canonical_text(lines: list[str], opt: OptionLine) -> str:
 _HFSS_Z0 = re.compile(r"^\s*!\s*port\s+impedance", re.IGNORECASE)
 
 
-def _hfss_references_differ(lines: list[str], r_ohm: float, n: int) -> bool:
+def _hfss_references_differ(lines: list[str], r_ohm: float, n: int, n_rows: int,
+                            src: str) -> bool:
     """True when an HFSS export's ``! Port Impedance`` comments (real and imaginary part
-    per port, or a full n x n matrix, per frequency) give references other than the option
-    line's R (scikit-rf's files write 50 0 there for R 50; TouchstoneParser.jl's spiral
-    inductor the matrix 50 0 0 0 0 0 50 0)."""
-    for raw in lines:
+    per port, or a full n x n matrix, one block per frequency) give references other than
+    the option line's R (scikit-rf's files write 50 0 there for R 50; TouchstoneParser.jl's
+    spiral inductor the matrix 50 0 0 0 0 0 50 0) or are wrapped over continuation lines:
+    scikit-rf then reads them. Blocks that scikit-rf cannot read (it failed with a
+    ValueError or an AttributeError) are refused here with the line: a port impedance
+    that is not finite or has no positive real part, an odd count without continuation,
+    a block count other than the number of frequencies."""
+    differ, blocks = False, 0
+
+    def refuse(why: str, k: int, expected: str) -> InputError:
+        return InputError(f"HFSS port impedance comment: {why}", source=src,
+                          place=f"line {k}", found=lines[k - 1].strip()[:80],
+                          expected=expected)
+
+    for k, raw in enumerate(lines, start=1):
         m = _HFSS_Z0.match(raw)
         if m is None:
             continue
+        blocks += 1
         vals = [float(t) for t in raw[m.end():].split() if _is_float(t)]
+        if len(vals) % 2:
+            nxt = lines[k].split("!", 1) if k < len(lines) else [""]
+            if nxt[0].strip() or len(nxt) < 2 or not nxt[1].split() \
+                    or not all(_is_float(t) for t in nxt[1].split()):
+                raise refuse("an odd count of numbers", k,
+                             "real and imaginary part per port (or per matrix entry)")
+            differ = True  # wrapped: scikit-rf joins the lines
+            continue
         z = np.asarray(vals[0::2], dtype=float) + 1j * np.asarray(vals[1::2], dtype=float)
-        if z.size == n * n and n > 1:  # a matrix: R on the diagonal, zeros elsewhere
-            z = z.reshape(n, n)
-            if np.any(z[~np.eye(n, dtype=bool)] != 0):
-                return True
-            z = np.diag(z)
-        if np.any(np.abs(z - r_ohm) > 1e-12 * r_ohm):
-            return True
-    return False
+        off = np.zeros(0, dtype=complex)
+        if z.size == n * n and n > 1:  # a matrix: the ports' values on the diagonal
+            off = z.reshape(n, n)[~np.eye(n, dtype=bool)]
+            z = np.diag(z.reshape(n, n))
+        if not (np.all(np.isfinite(z)) and np.all(z.real > 0)):
+            raise refuse("a port impedance that is not finite or has no positive real part",
+                         k, "real and imaginary part per port, real part > 0")
+        differ = differ or bool(np.any(off != 0)) or \
+            not bool(np.all(np.abs(z - r_ohm) <= 1e-12 * r_ohm))
+    if differ and blocks != n_rows:
+        raise InputError("HFSS port impedance comments: one block per frequency expected",
+                         source=src, found=f"{blocks} blocks for {n_rows} frequencies",
+                         expected=f"{n_rows} '! Port Impedance' blocks")
+    return differ
 
 
 def _read_with_skrf(text: str, opt: OptionLine, name: str, src: str) -> FrequencyData:
@@ -313,6 +341,9 @@ def _read_with_skrf(text: str, opt: OptionLine, name: str, src: str) -> Frequenc
     import skrf
     from skrf.io.touchstone import Touchstone
 
+    if opt.param not in ("S", "Y", "Z"):
+        raise InputError("unsupported Touchstone parameter type", source=src,
+                         found=opt.param, expected="S, Y or Z")
     fid = io.StringIO(text + "\n")
     fid.name = name
     try:
@@ -334,9 +365,6 @@ def _read_with_skrf(text: str, opt: OptionLine, name: str, src: str) -> Frequenc
                          place=f"data row {k + 2}", expected="strictly increasing")
     if not np.all(np.isfinite(net.s)):
         raise InputError("Touchstone data are not finite after conversion", source=src)
-    if opt.param not in ("S", "Y", "Z"):
-        raise InputError("unsupported Touchstone parameter type", source=src,
-                         found=opt.param, expected="S, Y or Z")
     kind: Kind = opt.param  # type: ignore[assignment]
     try:
         with np.errstate(all="ignore"), warnings.catch_warnings(record=True) as caught:
