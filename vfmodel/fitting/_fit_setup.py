@@ -175,14 +175,13 @@ def _anchors(
     return np.asarray(s_v, dtype=complex), np.asarray(h_v, dtype=complex), weight
 
 
-def _pole_bounds(fd: FrequencyData, omega_scale: float, below: float = _POLE_SPAN[0]
-                 ) -> tuple[float, float] | None:
+def _pole_bounds(fd: FrequencyData, omega_scale: float) -> tuple[float, float] | None:
     """Real-pole bounds of S fits (see :class:`_vf_core.Problem`); None for immittances
     and transfer functions, whose poles near 0 Hz are physical (a capacitor)."""
     if fd.kind != "S":
         return None
     lo = float(fd.omega[fd.omega > 0][0]) / omega_scale
-    return lo / below, _POLE_SPAN[1]
+    return lo / _POLE_SPAN[0], _POLE_SPAN[1]
 
 
 def _max_order(n_freq: int, has_dc: bool, n_extra: int) -> int:

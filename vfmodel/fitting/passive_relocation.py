@@ -49,10 +49,6 @@ FloatArray = NDArray[np.float64]
 _BELOW = (1e-3, 0.9, 12)  # grid below the band: geomspace(f_lo * a, f_lo * b, n) and 0 Hz
 _ABOVE = (1.1, 1e3, 16)  # grid above the band: geomspace(f_hi * a, f_hi * b, n)
 _RELOCATIONS = 5  # pole relocations per round
-# real poles no lower than f_lo / 10 here (the fits allow f_lo / 100 since session 33):
-# with f_lo / 100 the relocation rounds of wr1p5,line ended at 2.6e-7 instead of 1.7e-7
-# and wr2p2,line at 8.0e-8 instead of 2.9e-8
-_POLE_BELOW = 10.0
 
 
 def _grid(f_hz: FloatArray) -> FloatArray:
@@ -102,8 +98,7 @@ def relocate_passive(
     prob = core.Problem(s=np.asarray(2j * np.pi * f / omega_scale, dtype=complex), h=h,
                         w=np.ones((data.n_freq, 1)), fit_d=True, fit_e=False,
                         dc_index=0 if has_dc else None,
-                        pole_bounds=_pole_bounds(data, omega_scale, below=_POLE_BELOW),
-                        ridge=_RIDGE)
+                        pole_bounds=_pole_bounds(data, omega_scale), ridge=_RIDGE)
     grid = _grid(f)
     s_grid = np.asarray(2j * np.pi * grid / omega_scale, dtype=complex)
     w_lo = float(prob.s[prob.s.imag > 0][0].imag)
