@@ -27,7 +27,7 @@ from vfmodel.core.blas import capped_blas
 from vfmodel.core.frequency_data import FrequencyData, as_frequency_data
 from vfmodel.core.progress import Progress, no_progress
 from vfmodel.core.rational_model import RationalModel
-from vfmodel.errors import FitWarning, InputError, PassivityError
+from vfmodel.errors import FitWarning, InputError, PassivityError, SolverError
 from vfmodel.fitting.artifacts import DataArtifacts, find_artifacts
 from vfmodel.fitting.data_passivity import DataPassivity, data_passivity
 from vfmodel.fitting.defaults import ENFORCE_ITERATIONS, ENFORCE_TIME_LIMIT
@@ -185,7 +185,7 @@ def run_fit(
             try:
                 enforced, pas_e = enforce(model, max_iter=first_iter)
                 first = (enforced, pas_e, report)
-            except PassivityError as err:
+            except (PassivityError, SolverError) as err:  # the retries may still succeed
                 failure = str(err)
             # the retries below aim at this bound; not below two margins (an enforced
             # change is at least of the order of the margin: a fit exact to 1e-15 cannot
@@ -333,7 +333,7 @@ def _extra_poles_retry(
         return first
     try:
         enforced, check = enforce(extended, max_iter=max_iter)
-    except PassivityError:
+    except (PassivityError, SolverError):
         return first
     if not check.passive or (first is not None and fit_errors(enforced, data)[1]
                              >= fit_errors(first[0], data)[1]):
@@ -360,7 +360,7 @@ def _relocation_retry(
             return m
         try:
             return enforce(m, max_iter=max_iter)[0]
-        except PassivityError:
+        except (PassivityError, SolverError):  # one round's program failed: not kept
             return None
 
     best = first
@@ -415,7 +415,7 @@ def _out_of_band_retry(
         if not check.passive:
             try:
                 model, check = enforce(model, max_iter=max_iter)
-            except PassivityError:
+            except (PassivityError, SolverError):
                 continue
         err = fit_errors(model, data)[1]
         if check.passive and err < best_err:
