@@ -307,6 +307,21 @@ def _polish(model: RationalModel, w: float, tol: float) -> float:
     return w
 
 
+def _merged(bands: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """Bands with ordered edges, overlapping or touching ones merged. Polishing moves
+    each edge on its own: crossings within 1e-7 of each other (a 67-pole fit of a COMSOL
+    microstrip export, edges 7381070048, 7381071390 and 7381070870 rad/s) can change
+    order, and a band ended below its start (scipy's bounded search then raised
+    "The lower bound exceeds the upper bound")."""
+    out: list[tuple[float, float]] = []
+    for lo, hi in sorted((min(a, b), max(a, b)) for a, b in bands):
+        if out and lo <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], hi))
+        else:
+            out.append((lo, hi))
+    return out
+
+
 def _worst(
     model: RationalModel, bands: list[tuple[float, float]]
 ) -> tuple[float, float | None]:
@@ -423,8 +438,8 @@ def check_passivity(
         notes.append("violation found by sampling only")
     if used == "hamiltonian" and bands:
         polished = {w: _polish(model, w, tol) for w in crossings}
-        bands = [(polished.get(lo, lo), polished.get(hi, hi)) for lo, hi in bands]
-        crossings = [polished[w] for w in crossings]
+        bands = _merged([(polished.get(lo, lo), polished.get(hi, hi)) for lo, hi in bands])
+        crossings = sorted(polished[w] for w in crossings)
     worst, where = _worst(model, bands)
     if model.kind == "S":
         asym_viol = max(0.0, -d_margin)
