@@ -147,7 +147,11 @@ def vector_fit(
         1e-4 (barely felt in the band) while the order is chosen, then 1e-10 (ridge
         likewise scaled) for a last relocation at that order when that cuts the error
         by 1.25x and keeps the model's gain at 0 Hz, at the anchors and of D within 1e-3
-        of the anchored fit's (noise-free data; :mod:`vfmodel.fitting._out_of_band`). Larger
+        of the anchored fit's (noise-free data; :mod:`vfmodel.fitting._out_of_band`); when
+        that error is still above twice the noise margin of a measured noise floor, poles
+        are added in the lighter problem while each step gains 10 % and the largest
+        singular value on a dense grid stays within the anchored fit's plus its error
+        (:func:`vfmodel.fitting._out_of_band.grow`). Larger
         values (0.01-0.1) trade in-band accuracy for out-of-band passivity before an
         enforcement.
 
@@ -274,7 +278,24 @@ def vector_fit(
         )
         coef, history, n_it, converged = auto.coef, auto.history, auto.n_iterations, auto.converged
         reason, noise, hit_max = auto.reason, auto.noise_floor, auto.hit_max
-        if auto.prob is not None:  # the lighter relocation was kept
+        # a noise-free S fit that stopped at the anchored cap: more poles with the
+        # lighter out-of-band control (vfmodel.fitting._out_of_band.grow)
+        grown = None if lighter is None or target_error is not None else _out_of_band.grow(
+            prob, auto.prob, coef, fd.n_out, noise=noise,
+            margin=_order.RELATIVE_MARGIN if wname == "relative" else _order.NOISE_MARGIN,
+            w_lo=w_lo, max_order=cap, max_iterations=max_iterations, tol=tol,
+            stable=enforce_stability)
+        if grown is not None:
+            n_before = _vf_core.n_poles(coef.reps)
+            prob, coef = grown[0], grown[1].coef
+            n_it += grown[1].n_iterations
+            history = (*history, *grown[1].history)
+            converged = grown[1].converged
+            reason = (f"order {_vf_core.n_poles(coef.reps)}: grown from {n_before} poles with "
+                      f"the lighter out-of-band control (the anchored growth stopped at its "
+                      f"cap above the noise floor estimate {noise:.3g}; weighted relative "
+                      f"RMS error {grown[1].weighted_rel_rms:.3g})")
+        elif auto.prob is not None:  # the lighter relocation was kept
             prob = auto.prob
     else:
         if isinstance(order, bool) or not isinstance(order, int | np.integer):
