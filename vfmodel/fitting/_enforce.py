@@ -620,6 +620,7 @@ def enforce(
             continue
         report = check_passivity(current, method="hamiltonian")
         if report.passive:
+            current, report = _shrink(model, current, report, f, h_data, weighting)
             progress(_STAGE, max_iter, max_iter)
             dh = current(f) - h_model_data
             rms = float(np.sqrt(np.mean(np.abs(dh) ** 2)))
@@ -642,6 +643,53 @@ def enforce(
         f"{report.worst_violation:.3g} in bands {report.bands_hz[:3]} Hz; "
         "raise max_iter or the margin"
     )
+
+
+def _shrink(model: RationalModel, passive: RationalModel, report: PassivityReport,
+            f: FloatArray, h_data: ComplexArray, weighting: str
+            ) -> tuple[RationalModel, PassivityReport]:
+    """The certified model of the least error on the data among ``model + t (passive -
+    model)``, t = 1 and the bisection points of the smallest certified t.
+
+    With the poles fixed the passive models form a convex set (the largest singular value
+    or the least eigenvalue of the Hermitian part is convex, resp. concave, in the
+    residues and D), so every t between the smallest passive one and 1 is passive. The
+    programs' change is only as fine as the solver's tolerances (about 1e-10 of the
+    response, however small the violation): a fit of a lossless SMA model (AWR, 3.4e-14,
+    largest singular value 1 + 1.3e-11) was enforced at 2.5e-10, its bisected fraction
+    at 1.9e-11; a Murata capacitor (1.9e-15, D violating by 7e-14) 1.1e-10 -> 1.1e-13.
+    Each point is certified by the Hamiltonian test; the error against the data decides
+    between them (a change can also bring the model closer to the data), weighted as the
+    programs' objective (``weighting``: "relative" per frequency, else uniform)."""
+    n_steps = _SHRINK_STEPS if model.n_in**2 * model.n_poles <= _SHRINK_SIZE \
+        else _SHRINK_STEPS // 2
+    size = np.linalg.norm(h_data.reshape(f.size, -1), axis=1)
+    w = 1.0 / np.maximum(size, 1e-12 * float(np.max(size)) + 1e-300) \
+        if weighting == "relative" else np.ones(f.size)
+
+    def err(m: RationalModel) -> float:
+        return float(np.linalg.norm(w[:, None, None] * (m(f) - h_data)))
+
+    best, best_rep, best_err = passive, report, err(passive)
+    lo, hi = 0.0, 1.0
+    for _ in range(n_steps):
+        t = 0.5 * (lo + hi)
+        cand = RationalModel(model.poles, model.residues + t * (passive.residues - model.residues),
+                             model.dd + t * (passive.dd - model.dd), passive.ee, model.kind,
+                             model.z0)
+        rep = check_passivity(cand, method="hamiltonian")
+        if not rep.passive:
+            lo = t
+            continue
+        hi = t
+        e = err(cand)
+        if e < best_err:
+            best, best_rep, best_err = cand, rep, e
+    return best, best_rep
+
+
+_SHRINK_STEPS = 10  # bisection steps of _shrink (a fraction resolved to 1e-3)
+_SHRINK_SIZE = 4000  # ... half of them above this many residue unknowns (ports^2 x poles)
 
 
 _STAGE = "passivity enforcement (convex programs)"  # progress stage of one enforcement
