@@ -85,8 +85,6 @@ def lighter(
     return None
 
 
-
-
 # growth with the lighter control (:func:`grow`)
 _GROW_FROM = 2.0  # tried only while the error is this many noise margins above the noise
 _GROW_GAIN = 0.10  # a growth step must cut the error by at least this fraction
@@ -129,7 +127,7 @@ def grow(
     (scikit-rf 6.5e-10 / 5.1e-10 / 9.5e-12), enforced within 1.01x / 1.16x / 1.0x; D1
     43 -> 55 poles (1.8e-8 -> 1.3e-9); wr1p5,line 13 -> 19 poles (1.3e-9 -> 4.2e-13,
     enforced 1.7e-7 -> 2.7e-10, against its much smaller bound still beyond 1.2x).
-        """
+    """
     if (prob.anchors is None and prob.ridge == 0.0) or coef.c.shape[0] != n_ports**2:
         return None
     if noise is None or not noise > 0:
