@@ -76,9 +76,10 @@ def _order(value: str) -> int | str:
 @click.option("--enforce-margin", type=click.FloatRange(min=0, max=0.1, min_open=True,
                                                         max_open=True),
               default=None,
-              help="Relative passivity margin required at the cut frequencies "
-              "[default: 1e-6, or a tenth of max(fit error, data floor) when smaller, "
-              "at least 1e-10].")
+              help="Relative passivity margin required at the cut frequencies, kept in "
+              "the final model [default: 1e-6, or a tenth of max(fit error, data floor) when "
+              "smaller, at least 1e-10; the default margin only helps the convex programs and "
+              "the final model may give it back].")
 @click.option("--enforce-time-limit", type=click.FloatRange(min=0), default=ENFORCE_TIME_LIMIT,
               show_default=True, help="Seconds after the first passivity enforcement from "
               "which its retries (for an enforced error within 1.2x of max(fit error, data "

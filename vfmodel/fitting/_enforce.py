@@ -497,6 +497,7 @@ def enforce(
     perturb_d: bool,
     max_iter: int,
     margin: float,
+    keep_margin: bool = True,
     progress: Progress = no_progress,
 ) -> tuple[RationalModel, PassivityReport]:
     """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`."""
@@ -620,7 +621,8 @@ def enforce(
             continue
         report = check_passivity(current, method="hamiltonian")
         if report.passive:
-            current, report = _shrink(model, current, report, f, h_data, weighting)
+            held = (setup, pool) if keep_margin else None
+            current, report = _shrink(model, current, report, f, h_data, weighting, held)
             progress(_STAGE, max_iter, max_iter)
             dh = current(f) - h_model_data
             rms = float(np.sqrt(np.mean(np.abs(dh) ** 2)))
@@ -646,8 +648,8 @@ def enforce(
 
 
 def _shrink(model: RationalModel, passive: RationalModel, report: PassivityReport,
-            f: FloatArray, h_data: ComplexArray, weighting: str
-            ) -> tuple[RationalModel, PassivityReport]:
+            f: FloatArray, h_data: ComplexArray, weighting: str,
+            keep: tuple[_Setup, FloatArray] | None) -> tuple[RationalModel, PassivityReport]:
     """The certified model of the least error on the data among ``model + t (passive -
     model)``, t = 1 and the bisection points of the smallest certified t.
 
@@ -660,7 +662,12 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
     at 1.9e-11; a Murata capacitor (1.9e-15, D violating by 7e-14) 1.1e-10 -> 1.1e-13.
     Each point is certified by the Hamiltonian test; the error against the data decides
     between them (a change can also bring the model closer to the data), weighted as the
-    programs' objective (``weighting``: "relative" per frequency, else uniform)."""
+    programs' objective (``weighting``: "relative" per frequency, else uniform).
+
+    ``keep`` (the programs' setup and cut frequencies, Hz): a point must also keep the
+    required margin at the cut frequencies (or the enforced model's there, where that is
+    smaller), the documented meaning of ``enforce_passivity(margin=)``; None: the margin
+    was the programs' device only and may be given back (``run_fit``'s default margin)."""
     n_steps = _SHRINK_STEPS if model.n_in**2 * model.n_poles <= _SHRINK_SIZE \
         else _SHRINK_STEPS // 2
     size = np.linalg.norm(h_data.reshape(f.size, -1), axis=1)
@@ -670,6 +677,13 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
     def err(m: RationalModel) -> float:
         return float(np.linalg.norm(w[:, None, None] * (m(f) - h_data)))
 
+    def margins(m: RationalModel) -> FloatArray:
+        assert keep is not None
+        setup, pool = keep
+        return _margins(m.kind, _response(m, pool) / setup.h0) / _sizes(setup, pool)
+
+    need = None if keep is None else np.minimum(margins(passive), keep[0].margin)
+
     best, best_rep, best_err = passive, report, err(passive)
     lo, hi = 0.0, 1.0
     for _ in range(n_steps):
@@ -678,7 +692,7 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
                              model.dd + t * (passive.dd - model.dd), passive.ee, model.kind,
                              model.z0)
         rep = check_passivity(cand, method="hamiltonian")
-        if not rep.passive:
+        if not rep.passive or (need is not None and np.any(margins(cand) < need)):
             lo = t
             continue
         hi = t

@@ -478,6 +478,7 @@ def enforce_passivity(
     margin: float = 1e-6,
     allow_active: bool = False,
     progress: Progress = no_progress,
+    keep_margin: bool = True,
 ) -> tuple[RationalModel, PassivityReport]:
     """Make a stable Z, Y or S model passive with the smallest weighted change of its response.
 
@@ -512,6 +513,12 @@ def enforce_passivity(
     margin : float
         Required margin at the cut frequencies, relative: ``min eig(Re H) >=
         margin * ||H||`` (Z, Y) or ``sigma_max(H) <= 1 - margin`` (S); in (0, 0.1).
+    keep_margin : bool
+        The programs' change is then moved back towards the fit as far as the Hamiltonian
+        certificate allows (bisection on the segment, the point of least error on the
+        data kept). True (default): not below the margin at the cut frequencies; False:
+        the margin only helps the programs and may be given back (a change resolved
+        finer than the programs' 1e-10, e.g. for nearly lossless fits).
     allow_active : bool
         Enforce even when the data are active (their passivity violation floor,
         :func:`vfmodel.fitting.data_passivity.data_passivity`, exceeds 5 %); by default
@@ -572,7 +579,7 @@ def enforce_passivity(
             )
         rational, report = enforce(
             model.without_delay(), data, weighting=weighting, perturb_d=perturb_d,
-            max_iter=max_iter, margin=margin, progress=progress,
+            max_iter=max_iter, margin=margin, keep_margin=keep_margin, progress=progress,
         )
         return RationalModel(rational.poles, rational.residues, rational.d, rational.e,
                              rational.kind, rational.z0, delay=model.delay), report
@@ -583,5 +590,6 @@ def enforce_passivity(
         perturb_d=perturb_d,
         max_iter=max_iter,
         margin=margin,
+        keep_margin=keep_margin,
         progress=progress,
     )

@@ -179,7 +179,10 @@ def run_fit(
             # (the relative RMS error over all entries), per entry relative otherwise.
             # Measured, enforcement alone, uniform against relative (vfbench files):
             # hfss_18.2 1.02x against 1.26x its bound, mlin 2.9x against 5.9x
+            # the default margin only helps the programs (it may be given back); a margin
+            # the user asked for is kept at the cut frequencies
             enforce = partial(enforce_passivity, data=data, margin=margin, allow_active=True,
+                              keep_margin=enforce_margin is not None,
                               weighting="uniform" if report.weighting == "uniform"
                               else "relative", progress=progress)
             try:
