@@ -498,6 +498,7 @@ def auto_order(
     plateau_margin: float = PLATEAU_MARGIN,
     min_order: int = 0,
     finish: Finish | None = None,
+    extend: bool = True,
 ) -> AutoResult:
     """Grow the order from a small start until the noise floor (see module docstring).
 
@@ -513,6 +514,9 @@ def auto_order(
     it. The model kept is relocated to convergence unless it came from a converged trial.
     With ``target`` the floor is ``target / margin`` instead of the noise estimate (the
     order stops at the requested error).
+
+    ``extend`` allows the one more try of a plateau far above the noise floor (see
+    :data:`_FAR`).
 
     ``finish`` (an S fit's lighter out-of-band control) relocates the chosen poles once
     more in its own problem; when it keeps that relocation, the final relocation in
@@ -602,7 +606,7 @@ def auto_order(
         if err <= (1.0 - _MIN_GAIN) * best_err:
             n_gain = n
         if stall >= _patience(n_gain, err) and n >= min_order:
-            if not extended and noise > 0 and best_err > _FAR * noise \
+            if extend and not extended and noise > 0 and best_err > _FAR * noise \
                     and _dof_factor(prob, 2 * n) <= _ROOM:
                 # a plateau this far above the noise floor is tried once more from here:
                 # a response that rational functions approach slowly (a lossy line's
