@@ -291,10 +291,17 @@ def test_delay_extraction_cuts_the_order() -> None:
     data = FrequencyData(f, _delayed_line(f, tau), kind="S")
     model, report = vector_fit(data, delay="auto")
     assert model.delay == pytest.approx(tau, rel=0.05)
-    assert report.rel_rms_error < 1e-3 and model.n_poles <= 12
-    # without the delay: 167 poles on this machine; at least 5x more in any case
-    plain, _ = vector_fit(data, delay="none")
-    assert plain.n_poles >= 5 * model.n_poles
+    assert report.rel_rms_error < 1e-3
+    # at equal error (issue 13: "cut the order substantially at equal error"): without the
+    # delay, asked for the delayed model's error. Measured (session 35) over five OpenBLAS
+    # kernels: 9 poles at 1.5e-4 against 58 (SkylakeX), 15 at 1.5e-4 against 58 (Haswell,
+    # Zen), 15 at 7.5e-5 against 58 at 1.2e-4 (SandyBridge), 24 at 7.0e-5 against 170
+    # (Prescott). Until session 35 this compared the plain automatic fit (57-58 poles)
+    # with the delayed one at whatever error each reached (Haswell: 7 poles at 2.3e-4
+    # against 57 at 3.5e-5) and asked for 5x; the delayed fit is now more accurate, 15
+    # poles on three kernels
+    plain, _ = vector_fit(data, delay="none", target_error=report.rel_rms_error)
+    assert plain.n_poles >= 3.5 * model.n_poles
     check = check_passivity(model)
     if not check.passive:
         model, check = enforce_passivity(model, data)
