@@ -332,6 +332,14 @@ def _one_pole_less(
     return core.sort_reps(rest)
 
 
+def _trial(prob: core.Problem, reps: NDArray[np.complex128], limit: float,
+           max_iterations: int, stable: bool) -> core.FixedOrderResult:
+    """A trial of fewer poles: a short relocation that stops once within ``limit``."""
+    return _relocate.iterate(prob, reps, max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
+                             tol=_TRIAL_TOL, stable=stable, precise=None,
+                             patience=_FINAL_PATIENCE, target=limit)
+
+
 @dataclass
 class _Settled:
     """Outcome of :func:`_settle`."""
@@ -401,12 +409,9 @@ def _settle(
         # 65 and the trials 59 at 2.62e-3); on fewer the trials do it, and may find that
         # the growth's best was not the floor (Qucs NE02103, 9 points: 5 poles at 3.0e-3
         # where the wider pruning's 3 poles ended at 4.7e-3, within 1.1x of 4.4e-3)
-        few = _backward_prune(prob, pick[2], CAPPED_MARGIN / margin * limit)[0]
+        few = _backward_prune(prob, coef, CAPPED_MARGIN / margin * limit)[0]  # on from there
         if core.n_poles(coef.reps) - core.n_poles(few.reps) > 2 * _REDUCE_TRIALS:
-            rel = _relocate.iterate(prob, few.reps,  # relocated like a trial
-                                    max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
-                                    tol=_TRIAL_TOL, stable=stable, precise=None,
-                                    patience=_FINAL_PATIENCE, target=limit)
+            rel = _trial(prob, few.reps, limit, max_iterations, stable)
             n_it += rel.n_iterations
             history.extend(rel.history)
             if rel.weighted_rel_rms <= limit:
@@ -425,16 +430,8 @@ def _settle(
     for _ in range(0 if took is not None else _REDUCE_TRIALS):  # one pole less, relocated
         if coef.reps.size <= 1:
             break
-        trial = _relocate.iterate(
-            prob,
-            _reseed(_one_pole_less(coef.reps, cost, w_lo), w_lo),
-            max_iterations=min(max_iterations, _TRIAL_ITERATIONS),
-            tol=_TRIAL_TOL,
-            stable=stable,
-            precise=None,
-            patience=_FINAL_PATIENCE,
-            target=limit,
-        )
+        trial = _trial(prob, _reseed(_one_pole_less(coef.reps, cost, w_lo), w_lo), limit,
+                       max_iterations, stable)
         n_it += trial.n_iterations
         history.extend(trial.history)
         if trial.weighted_rel_rms > limit:
@@ -636,13 +633,9 @@ def auto_order(
     # at the noise floor the last model is the pick; at a plateau the best error is the floor
     margin = _margin_at(margin if why == "noise" else plateau_margin, anchored,
                         noise if why == "noise" else best_err)
-
-    def settle(m: float) -> _Settled:
-        return _settle(prob, tried, best_err, m, why=why, noise=noise, anchored=anchored,
-                       finish=finish, w_lo=w_lo, max_iterations=max_iterations, tol=tol,
-                       stable=stable)
-
-    settled = settle(margin)
+    settled = _settle(prob, tried, best_err, margin, why=why, noise=noise, anchored=anchored,
+                      finish=finish, w_lo=w_lo, max_iterations=max_iterations, tol=tol,
+                      stable=stable)
     coef, converged, best_err = settled.coef, settled.converged, settled.best_err
     took = settled.took
     n_it += settled.n_iterations
