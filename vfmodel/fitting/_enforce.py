@@ -450,6 +450,16 @@ def _pick(f: FloatArray, m: FloatArray, bad: NDArray[np.bool_]) -> FloatArray:
     return np.asarray(f[pick], dtype=float)
 
 
+def _weights(h_data: ComplexArray, weighting: str, h0: float) -> FloatArray:
+    """Weights of the programs' objective per sample and entry: "relative" 1 / |H_ij|
+    (not below 1e-3 of the sample's largest entry), else uniform 1 / ``h0``."""
+    if weighting == "relative":
+        mag = np.abs(h_data)
+        floor = 1e-3 * np.max(mag, axis=(1, 2), keepdims=True)
+        return np.asarray(1.0 / np.maximum(mag, np.maximum(floor, 1e-300)), dtype=float)
+    return np.full(h_data.shape, 1.0 / h0)
+
+
 def _objective(
     setup_model: RationalModel,
     f: FloatArray,
@@ -460,13 +470,7 @@ def _objective(
 ) -> tuple[FloatArray, sparse.csr_matrix]:
     """Column scale and the block-diagonal QR-reduced objective (see module docstring)."""
     n = setup_model.n_in
-    if weighting == "relative":
-        mag = np.abs(h_data)
-        floor = 1e-3 * np.max(mag, axis=(1, 2), keepdims=True)
-        wts = 1.0 / np.maximum(mag, np.maximum(floor, 1e-300))
-    else:
-        wts = np.full(h_data.shape, 1.0 / h0)
-    wts = wts / np.sqrt(f.size)
+    wts = _weights(h_data, weighting, h0) / np.sqrt(f.size)
     phi_d = _basis(setup_model.poles, 2j * np.pi * f, perturb_d)
     col = np.max(np.abs(phi_d), axis=0)
     col = np.where(col > 0, col, 1.0)
@@ -662,7 +666,7 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
     at 1.9e-11; a Murata capacitor (1.9e-15, D violating by 7e-14) 1.1e-10 -> 1.1e-13.
     Each point is certified by the Hamiltonian test; the error against the data decides
     between them (a change can also bring the model closer to the data), weighted as the
-    programs' objective (``weighting``: "relative" per frequency, else uniform).
+    programs' objective (:func:`_weights`).
 
     ``keep`` (the programs' setup and cut frequencies, Hz): a point must also keep the
     required margin at the cut frequencies (or the enforced model's there, where that is
@@ -670,12 +674,10 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
     was the programs' device only and may be given back (``run_fit``'s default margin)."""
     n_steps = _SHRINK_STEPS if model.n_in**2 * model.n_poles <= _SHRINK_SIZE \
         else _SHRINK_STEPS // 2
-    size = np.linalg.norm(h_data.reshape(f.size, -1), axis=1)
-    w = 1.0 / np.maximum(size, 1e-12 * float(np.max(size)) + 1e-300) \
-        if weighting == "relative" else np.ones(f.size)
+    w = _weights(h_data, weighting, 1.0)
 
     def err(m: RationalModel) -> float:
-        return float(np.linalg.norm(w[:, None, None] * (m(f) - h_data)))
+        return float(np.linalg.norm(w * (m(f) - h_data)))
 
     def margins(m: RationalModel) -> FloatArray:
         assert keep is not None
