@@ -1,0 +1,123 @@
+"""Passivity enforcement at fixed poles reaches the optimum. Reference: the bounded-real
+lemma (Kalman-Yakubovich-Popov), an independent formulation of the same problem: with the
+poles fixed, an S model C (sI - A)^-1 B + D with A stable is passive with
+||H||_inf <= gamma exactly when a symmetric P exists with
+
+    [[A^T P + P A, P B, C^T], [B^T P, -gamma I, D^T], [C, D, -gamma I]] <= 0,
+
+which is linear in (P, C, D) for fixed (A, B). Minimising the programs' objective over it
+(cvxpy, Clarabel) gives the least change any passive model with these poles can make
+(Coelho, Phillips, Silveira, "A convex programming approach for generating guaranteed
+passive approximations to tabulated frequency-data", IEEE TCAD 23(2), 2004). The
+enforcement's cutting planes and cones solve the semi-infinite form of the same program
+(one condition per frequency); they must end within 1 % of the optimum (measured:
+within 1e-5 of it at orders 10, 16 and 24 on three OpenBLAS kernels).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cvxpy as cp
+import numpy as np
+from scipy import sparse
+
+from vfmodel import RationalModel, read_spectrum, vector_fit
+from vfmodel.fitting import check_passivity, enforce_passivity
+from vfmodel.fitting._enforce import _objective, _to_residues
+from vfmodel.fitting._fit_report import fit_errors
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _realisation(model: RationalModel, alpha: float) -> tuple[np.ndarray, np.ndarray,
+                                                               list[tuple[int, int, float]]]:
+    """Real (A, B) of the poles / alpha, each pole's states scaled to a unit Gramian
+    diagonal; blocks (first state, basis column, state scale)."""
+    n = model.n_in
+    eye = np.eye(n)
+    a_blocks: list[np.ndarray] = []
+    b_blocks: list[np.ndarray] = []
+    blocks: list[tuple[int, int, float]] = []
+    k = col = state = 0
+    while k < model.n_poles:
+        p = model.poles[k] / alpha
+        c = float(np.sqrt(2 * abs(p.real)))
+        blocks.append((state, col, c))
+        if p.imag == 0:
+            a_blocks.append(p.real * eye)
+            b_blocks.append(c * eye)
+            k, col, state = k + 1, col + 1, state + n
+        else:
+            a_blocks.append(np.block([[p.real * eye, p.imag * eye], [-p.imag * eye, p.real * eye]]))
+            b_blocks.append(np.vstack([2 * c * eye, 0 * eye]))
+            k, col, state = k + 2, col + 2, state + 2 * n
+    return sparse.block_diag(a_blocks).toarray(), np.vstack(b_blocks), blocks
+
+
+def _bounded_real_optimum(model: RationalModel, f: np.ndarray, h: np.ndarray,
+                          gamma: float) -> RationalModel:
+    """The passive model (||H||_inf <= gamma) with the poles of ``model`` nearest to ``h``
+    in the enforcement's objective (uniform weights, the same scaled unknowns)."""
+    n, alpha = model.n_in, float(np.max(np.abs(model.poles)))
+    col, r_blocks = _objective(model, f, h, "uniform", True, 1.0)
+    n_b = col.size
+    a, b, blocks = _realisation(model, alpha)
+    ns = a.shape[0]
+    # C = C0 + G x: x[(i n + j) n_b + k] is the scaled change of basis column k, entry (i, j)
+    c0 = np.zeros((n, ns))
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    k_pole = 0
+    for state, k, c in blocks:
+        res = model.residues[k_pole]
+        parts = [res.real] if model.poles[k_pole].imag == 0 else [res.real, res.imag]
+        for m, part in enumerate(parts):
+            c0[:, state + m * n:state + (m + 1) * n] = part / (alpha * c)
+            for i in range(n):
+                for j in range(n):
+                    rows.append(i * ns + state + m * n + j)
+                    cols.append((i * n + j) * n_b + k + m)
+                    vals.append(1.0 / (col[k + m] * alpha * c))
+        k_pole += len(parts)
+    g_c = sparse.csr_matrix((vals, (rows, cols)), shape=(n * ns, n * n * n_b))
+    d_idx = [(i * n + j) * n_b + n_b - 1 for i in range(n) for j in range(n)]
+    g_d = sparse.csr_matrix((np.full(n * n, 1.0 / col[-1]), (range(n * n), d_idx)),
+                            shape=(n * n, n * n * n_b))
+    x = cp.Variable(n * n * n_b)
+    p = cp.Variable((ns, ns), symmetric=True)
+    c_mat = cp.reshape(c0.ravel() + g_c @ x, (n, ns), order="C")
+    d_mat = cp.reshape(model.dd.ravel() + g_d @ x, (n, n), order="C")
+    lmi = cp.bmat([[a.T @ p + p @ a, p @ b, c_mat.T],
+                   [b.T @ p, -gamma * np.eye(n), d_mat.T],
+                   [c_mat, d_mat, -gamma * np.eye(n)]])
+    prob = cp.Problem(cp.Minimize(cp.norm(r_blocks @ x)), [0.5 * (lmi + lmi.T) << 0])
+    prob.solve(solver=cp.CLARABEL)
+    assert prob.status == cp.OPTIMAL, prob.status
+    xb = np.transpose(np.asarray(x.value).reshape(n, n, n_b), (2, 0, 1)) / col[:, None, None]
+    dr, dd = _to_residues(model.poles, xb, n)
+    return RationalModel(model.poles, model.residues + dr, model.dd + dd, kind="S",
+                         z0=model.z0)
+
+
+def test_enforcement_reaches_the_bounded_real_optimum() -> None:
+    # scikit-rf's microstrip line model (Kirschning's dispersion; 100 points, 2 ports), a
+    # fixed order; the fit violates passivity above the band. Measured (session 36) on the
+    # automatic fit of 24 poles: enforced 2.45x the fit error, the optimum 2.45x; the same
+    # agreement (3 digits) on four unseen files (4-port couplers and antennas, a 2-port
+    # openEMS transition).
+    data = read_spectrum(ROOT / "data" / "vfbench" / "mlin,djordjevicsvensson,kirschning.s2p")
+    model, _ = vector_fit(data, order=16)
+    assert not check_passivity(model).passive
+    margin = 1e-6
+    enforced, rep = enforce_passivity(model, data=data, margin=margin, keep_margin=False,
+                                      weighting="uniform")
+    assert rep.passive
+    optimum = _bounded_real_optimum(model, data.freq_hz, data.values, 1.0 - margin)
+    assert check_passivity(optimum).passive
+    e_enf, e_opt = fit_errors(enforced, data)[1], fit_errors(optimum, data)[1]
+    assert e_enf <= 1.01 * e_opt, (e_enf, e_opt)
+    # the optimum is a lower bound for every passive model with these poles: the
+    # enforcement cannot beat it by more than the margin it may give back
+    assert e_opt <= 1.01 * e_enf, (e_enf, e_opt)
