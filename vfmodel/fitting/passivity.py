@@ -51,6 +51,7 @@ CheckMethod = Literal["auto", "hamiltonian", "sampling"]
 
 _CHUNK = 4096
 _CROSS_CHECK = 3000  # log-spaced points of the sampling cross-check of a certificate
+_NEAR_SPAN = np.linspace(-1e-2, 1e-2, 41)  # ... and around eigenvalues near the axis
 
 
 @dataclass(frozen=True)
@@ -228,10 +229,12 @@ def _edges_from_sampling(
     n_samples: int,
     tol: float,
     around: FloatArray | None = None,
+    near: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, float]:
     """Sign changes of the margin on a dense grid, refined by brentq (rad/s); also the
     grid and the smallest margin on it. ``around``: frequencies (rad/s) sampled closely
-    on both sides (band edges of the Hamiltonian test)."""
+    on both sides (band edges of the Hamiltonian test); ``near``: frequencies (rad/s)
+    whose +-1 % is sampled every 0.05 % (eigenvalues near the axis)."""
     mags = np.abs(model.poles) if model.n_poles else np.array([1.0])
     mags = mags[mags > 0] if np.any(mags > 0) else np.array([1.0])
     grid = [np.logspace(np.log10(mags.min()) - 6, np.log10(mags.max()) + 4, n_samples)]
@@ -241,6 +244,8 @@ def _edges_from_sampling(
     if around is not None and around.size:
         rel = np.array([-3e-2, -1e-3, -1e-6, 1e-6, 1e-3, 3e-2])
         grid.append((around[:, None] * (1.0 + rel[None, :])).ravel())
+    if near is not None and near.size:
+        grid.append((near[:, None] * (1.0 + _NEAR_SPAN[None, :])).ravel())
     w = np.unique(np.concatenate(grid))
     w = w[w > 0]
     m = passivity_margin(model, w)
@@ -397,10 +402,11 @@ def check_passivity(
     used: Literal["hamiltonian", "sampling"] = "hamiltonian"
     form: str | None = None
     omega: FloatArray
+    near: FloatArray = np.zeros(0)
     if method != "sampling":
         try:
             cr = crossing_frequencies(model)
-            omega, form = cr.omega, cr.form
+            omega, form, near = cr.omega, cr.form, cr.near
         except (np.linalg.LinAlgError, ValueError) as err:
             if method == "hamiltonian":
                 raise PassivityError(f"Hamiltonian eigenvalue problem failed: {err}") from err
@@ -419,7 +425,8 @@ def check_passivity(
         # cross-check of the eigenvalue test: a crossing it misses (rounding in a nearly
         # singular or badly scaled pencil) shows as a sign change on a dense grid, which
         # also samples both sides of every edge it found, 0 Hz and far beyond the poles
-        edges, _, min_margin = _edges_from_sampling(model, _CROSS_CHECK, tol, around=omega)
+        edges, _, min_margin = _edges_from_sampling(model, _CROSS_CHECK, tol, around=omega,
+                                                    near=near)
         missed = [x for x in edges if not np.any(np.abs(omega - x) <= 1e-6 * x)]
         if missed:
             notes.append(
