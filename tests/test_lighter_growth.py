@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests._ladders import rlc_ladder_s
 from vfmodel import FrequencyData, vector_fit
 from vfmodel.fitting import _out_of_band
 from vfmodel.fitting._fit_report import fit_errors
@@ -17,21 +18,8 @@ _SECTIONS = ((17.3449, 1.82070e-4, 234.235, 2.20683e-5),
              (8.62360, 4.19797e-4, 5615.22, 4.03200e-7))
 
 
-def _ladder(f: np.ndarray, z0: float = 50.0) -> np.ndarray:
-    """S of the ladder (series R-L then shunt R || C per section) from its ABCD matrix."""
-    s = 2j * np.pi * f
-    a, b, c, d = np.ones_like(s), np.zeros_like(s), np.zeros_like(s), np.ones_like(s)
-    for rs, ls, rp, cp in _SECTIONS:
-        zs, yp = rs + s * ls, 1.0 / rp + s * cp
-        a, b, c, d = a, a * zs + b, c, c * zs + d
-        a, b, c, d = a + b * yp, b, c + d * yp, d
-    den = a + b / z0 + c * z0 + d
-    out = np.empty((f.size, 2, 2), complex)
-    out[:, 0, 0] = (a + b / z0 - c * z0 - d) / den
-    out[:, 0, 1] = 2 * (a * d - b * c) / den
-    out[:, 1, 0] = 2 / den
-    out[:, 1, 1] = (-a + b / z0 - c * z0 + d) / den
-    return out
+def _ladder(f: np.ndarray) -> np.ndarray:
+    return rlc_ladder_s(f, _SECTIONS)
 
 
 def _dense_sigma(model, f: np.ndarray) -> float:  # type: ignore[no-untyped-def]

@@ -711,7 +711,7 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
 # within a factor _SHRINK_LOG, 10 more resolve it to 1e-3 of itself. With the linear
 # bisection alone (10 steps, fractions down to 1e-3) lossless fits ended 57-1560x beyond
 # their fit error: Murata GRM1555 (fit 1.9e-15) 1.1e-13, AlbertKumar's sample.s2p (2.1e-15)
-# 3.2e-12; now 3.0e-15 and 2.2e-15 (with 40 linear steps).
+# 3.2e-12; now 3.0e-15 and 2.2e-15 (40 linear steps reach the same).
 _SHRINK_STEPS = 16
 _SHRINK_SIZE = 4000  # ... half of them above this many residue unknowns (ports^2 x poles)
 _SHRINK_LEAST = 1e-16  # least fraction searched (below it the change is rounding)
