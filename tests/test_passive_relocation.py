@@ -40,7 +40,10 @@ def test_fit_passive_within_bound(name: str) -> None:
     it in the fit's norm (uniform for S data, the norm of the relative RMS error). Taken
     out in session 33: its S-parameters are at HFSS's port impedances, which were read as
     50 ohm; renormalised to port 1's 6.47 ohm the data floor is 2.6e-6 and the enforced
-    model 1.29x it (70 s)."""
+    model 1.29x it (70 s). Not put back in session 37: with the extra out-of-band poles
+    it ends 1.10x its floor in 20 s with one OpenBLAS kernel (SkylakeX) and 1.29x after
+    the 300 s retries with another (Haswell; the extra poles' enforcement needs 40
+    programs there and ends at 9.8x)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # HFSS port impedances: renormalised, a warning
         data = read_spectrum(VFBENCH / name).to_kind("S")
@@ -115,3 +118,36 @@ def test_stop_is_asked_only_before_a_further_round() -> None:
     asked.clear()
     relocate_passive(model, data, enforce, rounds=4, good_enough=np.inf, stop=stop)
     assert (len(enforced), len(asked)) == (1, 0)
+
+
+def _coupler_s(f_hz: np.ndarray, c_db: float = 10.0, f0_hz: float = 5e9) -> np.ndarray:
+    """S of an ideal (lossless, matched) quarter-wave coupled-line coupler of coupling
+    ``c_db`` at ``f0_hz``: port 1 -> 2 through, 1 -> 3 coupled, 1 -> 4 isolated (Pozar,
+    Microwave Engineering, 4th ed., section 7.6)."""
+    c = 10 ** (-c_db / 20)
+    k = np.sqrt(1 - c * c)
+    th = np.pi / 2 * f_hz / f0_hz
+    den = k * np.cos(th) + 1j * np.sin(th)
+    t, q, z = k / den, 1j * c * np.sin(th) / den, np.zeros(f_hz.size, complex)
+    return np.array([[z, t, q, z], [t, z, z, q], [q, z, z, t], [z, q, t, z]]).transpose(2, 0, 1)
+
+
+def test_four_port_extra_out_of_band_poles() -> None:
+    """A lossless 4-port over 3-7 GHz (101 points, written to 7 decimals as simulators
+    write Touchstone files): its unitary S leaves the enforcement no room in band, so
+    bending the fit above the band costs the band. With real poles added out of band
+    (tried for 1-2 ports only before session 37) the enforced model is 2.14x max(fit
+    error, data floor) from the data, 5.21x without (measured with two OpenBLAS kernels);
+    not 1.2x (issue 13's line is not met on this kind of file)."""
+    from vfmodel.core.frequency_data import FrequencyData
+
+    f = np.linspace(3e9, 7e9, 101)
+    s = _coupler_s(f)
+    data = FrequencyData(f, np.round(s.real, 7) + 1j * np.round(s.imag, 7), kind="S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = run_fit([data], passive=True, delay="auto")
+    assert res.passivity is not None and res.passivity.passive
+    floor = res.data_passivity.floor if res.data_passivity else 0.0
+    assert res.rel_rms_error <= 3.0 * max(res.unconstrained_rel_rms_error, floor)
+    assert _dense_sigma(res.model, f) <= 1 + 1e-9

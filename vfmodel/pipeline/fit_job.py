@@ -200,7 +200,7 @@ def run_fit(
                        ) -> bool:
                 return (first is None or fit_errors(first[0], data)[1] > bound) \
                     and not clock.out()
-            if retry and data.n_in <= _EXTRA_POLES_PORTS and wanted(first):
+            if retry and wanted(first):
                 first = _extra_poles_retry(model, data, first, report, enforce, first_iter)
             if retry and wanted(first):
                 first = _out_of_band_retry(data, first, fit_kw, enforce,
@@ -269,10 +269,14 @@ _ENFORCE_RATIO = 1.2  # enforced error within this factor of max(fit error, data
 _MARGIN = (1e-6, 0.1, 1e-10)  # default margin, its share of the error bound, its floor
 _FIRST_ITERATIONS = 15  # S: programs of the first enforcement (anchored refits follow)
 _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cost)
-# extra out-of-band poles for S models of at most this many ports: the programs grow with
-# ports^2 x poles unknowns and the cuts' mixtures; on a 3-port HFSS export (401 points)
-# the retry ran for more than 7 minutes (loaded); its measured gains were all on 1-2 ports
-_EXTRA_POLES_PORTS = 2
+# the extra out-of-band poles and the relocation's second start were for S models of at
+# most 2 ports until session 37 (a 3-port HFSS export once ran for more than 7 minutes,
+# loaded); now for all the anchored retries take (_RETRY_PORTS). Measured in session 37 on
+# the 3-4 port files of vfbench and the unseen sets (enforced error / max(fit error, data
+# floor), run_fit time): front_face 62x -> 25x, Ideal_TRL 8.1x -> 2.4x, M_Strip 5.7x ->
+# 3.5x (3.7 -> 32 s), hfss_18.2 1.29x (216 s) -> 1.10x (20 s) with one OpenBLAS kernel
+# (unchanged with another); the other 11 unchanged or within 1.2x either way, at most 20 s
+# more; a lossless 4-port coupler (tests/test_passive_relocation.py) 5.2x -> 2.1x
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
 # relocation against the enforced model out of band (fitting.passive_relocation): S models
 # of at most this many ports (each round is one enforcement), rounds at most
@@ -369,11 +373,10 @@ def _relocation_retry(
     best = first
     best_err = np.inf if first is None else fit_errors(first[0], data)[1]
     # first targets: the best passive model so far (no enforcement of the fit, which can
-    # fail or take minutes), then (1-2 ports, or without such a model) the enforced fit
-    # itself (measured: Clarity_example 1.06x vs 1.47x, cpw 4.4x vs 2.6x)
+    # fail or take minutes), then the enforced fit itself (measured: Clarity_example 1.06x
+    # vs 1.47x, cpw 4.4x vs 2.6x)
     starts: list[RationalModel | None] = [] if first is None else [first[0]]
-    if first is None or data.n_in <= _EXTRA_POLES_PORTS:
-        starts.append(None)
+    starts.append(None)
     for start in starts:
         if clock.out():
             break
