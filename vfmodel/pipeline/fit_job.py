@@ -275,8 +275,9 @@ _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cos
 # the 3-4 port files of vfbench and the unseen sets (enforced error / max(fit error, data
 # floor), run_fit time): front_face 62x -> 25x, Ideal_TRL 8.1x -> 2.4x, M_Strip 5.7x ->
 # 3.5x (3.7 -> 32 s), hfss_18.2 1.29x (216 s) -> 1.10x (20 s) with one OpenBLAS kernel
-# (unchanged with another); the other 11 unchanged or within 1.2x either way, at most 20 s
-# more; a lossless 4-port coupler (tests/test_passive_relocation.py) 5.2x -> 2.1x
+# (unchanged with another); the other 11 unchanged or within 1.2x either way, at a cost of
+# up to 55 s where nothing was gained (ku-cms T1, 4 ports, 155 poles: 24 -> 79 s, loaded);
+# a lossless 4-port coupler (tests/test_passive_relocation.py) 5.2x -> 2.1x
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
 # relocation against the enforced model out of band (fitting.passive_relocation): S models
 # of at most this many ports (each round is one enforcement), rounds at most
