@@ -275,7 +275,7 @@ _RETRY_PORTS = 4  # anchored refits for S models of at most this many ports (cos
 # the 3-4 port files of vfbench and the unseen sets (enforced error / max(fit error, data
 # floor), run_fit time): front_face 62x -> 25x, Ideal_TRL 8.1x -> 2.4x, M_Strip 5.7x ->
 # 3.5x (3.7 -> 32 s), hfss_18.2 1.29x (216 s) -> 1.10x (20 s) with one OpenBLAS kernel
-# (unchanged with another); the other 11 unchanged or within 1.2x either way, at a cost of
+# (2.63x either way with Haswell); the other 11 unchanged or within 1.2x either way, at a cost of
 # up to 55 s where nothing was gained (ku-cms T1, 4 ports, 155 poles: 24 -> 79 s, loaded);
 # a lossless 4-port coupler (tests/test_passive_relocation.py) 5.2x -> 2.1x
 _OOB_WEIGHTS = (1e-2, 1e-1)  # stronger out-of-band anchors tried when enforcement costs more
@@ -376,8 +376,7 @@ def _relocation_retry(
     # first targets: the best passive model so far (no enforcement of the fit, which can
     # fail or take minutes), then the enforced fit itself (measured: Clarity_example 1.06x
     # vs 1.47x, cpw 4.4x vs 2.6x)
-    starts: list[RationalModel | None] = [] if first is None else [first[0]]
-    starts.append(None)
+    starts: list[RationalModel | None] = ([] if first is None else [first[0]]) + [None]
     for start in starts:
         if clock.out():
             break
