@@ -81,9 +81,11 @@ def _order(value: str) -> int | str:
               "smaller, at least 1e-10; the default margin only helps the convex programs and "
               "the final model may give it back].")
 @click.option("--enforce-time-limit", type=click.FloatRange(min=0), default=ENFORCE_TIME_LIMIT,
-              show_default=True, help="Seconds after the first passivity enforcement from "
-              "which its retries (for an enforced error within 1.2x of max(fit error, data "
-              "floor)) start no further enforcement; 0: no limit.")
+              show_default=True, help="Seconds from the start of passivity enforcement "
+              "after which no further convex program starts (S data of at most 4 ports: "
+              "the first enforcement and its retries for an enforced error within 1.2x of "
+              "max(fit error, data floor)); no certified model by then exits 2; 0: no "
+              "limit.")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Also write a SPICE subcircuit '.subckt NAME p1..pN ref'.")
 @click.option("--subckt-name", default="vfmodel", show_default=True,

@@ -51,6 +51,7 @@ References
 
 from __future__ import annotations
 
+import time
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
@@ -503,8 +504,10 @@ def enforce(
     margin: float,
     keep_margin: bool = True,
     progress: Progress = no_progress,
+    deadline: float | None = None,
 ) -> tuple[RationalModel, PassivityReport]:
-    """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`."""
+    """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`
+    (``deadline``: a ``time.monotonic()`` value after which no further program starts)."""
     if weighting not in ("relative", "uniform"):
         raise InputError(
             "weighting: unknown choice", found=repr(weighting),
@@ -582,6 +585,11 @@ def enforce(
     report = first
     scale = 1.0  # objective size of the last program (the next one's scale)
     for it in range(1, max_iter + 1):
+        if it > 1 and deadline is not None and time.monotonic() > deadline:
+            raise PassivityError(
+                f"passivity not certified when the time limit passed (after {it - 1} "
+                "convex programs)"
+            )
         progress(_STAGE, it - 1, max_iter)
         pool = np.union1d(pool, new_f)
         extra = np.setdiff1d(new_f, grid)

@@ -27,6 +27,7 @@ References
 from __future__ import annotations
 
 import os
+import time
 import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
@@ -486,6 +487,7 @@ def enforce_passivity(
     allow_active: bool = False,
     progress: Progress = no_progress,
     keep_margin: bool = True,
+    time_limit: float | None = None,
 ) -> tuple[RationalModel, PassivityReport]:
     """Make a stable Z, Y or S model passive with the smallest weighted change of its response.
 
@@ -533,6 +535,9 @@ def enforce_passivity(
     progress : callable
         ``progress(stage, done, total)`` once per convex program (programs of a many-pole
         model can take seconds to a minute each).
+    time_limit : float, optional
+        Seconds after which no further convex program starts (the first always runs);
+        a model not certified by then raises :class:`PassivityError`. None: no limit.
 
     Returns
     -------
@@ -546,7 +551,7 @@ def enforce_passivity(
         Active data (unless ``allow_active``), data of another port count.
     PassivityError
         Unstable model, E that cannot be made passive, or no certificate after
-        ``max_iter`` programs.
+        ``max_iter`` programs or within ``time_limit``.
     SolverError
         A convex program did not end with status "optimal".
 
@@ -576,6 +581,10 @@ def enforce_passivity(
                 expected=f"data within {100 * ACTIVE_FLOOR:g} % of passive, or "
                 "allow_active=True",
             )
+    if time_limit is not None and not time_limit >= 0:  # NaN too
+        raise InputError("time_limit must be a number of seconds >= 0",
+                         found=repr(time_limit), expected="seconds >= 0, or None")
+    deadline = None if time_limit is None else time.monotonic() + time_limit
     if weighting == "auto":
         weighting = "uniform" if model.kind == "S" else "relative"
     if model.delay:
@@ -587,6 +596,7 @@ def enforce_passivity(
         rational, report = enforce(
             model.without_delay(), data, weighting=weighting, perturb_d=perturb_d,
             max_iter=max_iter, margin=margin, keep_margin=keep_margin, progress=progress,
+            deadline=deadline,
         )
         return RationalModel(rational.poles, rational.residues, rational.d, rational.e,
                              rational.kind, rational.z0, delay=model.delay), report
@@ -599,4 +609,5 @@ def enforce_passivity(
         margin=margin,
         keep_margin=keep_margin,
         progress=progress,
+        deadline=deadline,
     )

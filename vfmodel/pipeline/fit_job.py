@@ -122,8 +122,10 @@ def run_fit(
     reported as an :class:`InputError` naming the options that control it.
     ``enforce_margin`` None: 1e-6, or a tenth of max(fit error, data floor) when that is
     smaller, at least 1e-10 (:func:`enforce_margin_for`). ``enforce_time_limit``: seconds
-    after the first enforcement from which the retries start no further enforcement (None
-    or 0: no limit); a model kept because of it carries a note saying so.
+    from the start of passivity enforcement after which no further convex program starts
+    (S models of at most 4 ports, which get retries; None or 0: no limit); a model kept
+    because of it carries a note saying so, and no certified model by then is an
+    :class:`InputError` naming the option.
     """
     if enforce_time_limit is not None and not enforce_time_limit >= 0:  # NaN too
         raise InputError("enforce_time_limit must be a number of seconds >= 0 (0: no limit)",
@@ -181,10 +183,21 @@ def run_fit(
             # hfss_18.2 1.02x against 1.26x its bound, mlin 2.9x against 5.9x
             # the default margin only helps the programs (it may be given back); a margin
             # the user asked for is kept at the cut frequencies
-            enforce = partial(enforce_passivity, data=data, margin=margin, allow_active=True,
-                              keep_margin=enforce_margin is not None,
-                              weighting="uniform" if report.weighting == "uniform"
-                              else "relative", progress=progress)
+            bound_args = partial(enforce_passivity, data=data, margin=margin,
+                                 allow_active=True, keep_margin=enforce_margin is not None,
+                                 weighting="uniform" if report.weighting == "uniform"
+                                 else "relative", progress=progress)
+            # the time limit covers every enforcement of the S models that get retries;
+            # the others' single enforcement runs to its end (max_iter programs). A
+            # 4-port coupler's first enforcement (64 poles, 2,400-2,900 cuts) ran for
+            # more than 14 minutes, its programs growing to 4-6 minutes each (measured
+            # with another job on the second core)
+            clock = _EnforceClock(enforce_time_limit)
+
+            def enforce(m: RationalModel, *, max_iter: int
+                        ) -> tuple[RationalModel, PassivityReport]:
+                return bound_args(m, max_iter=max_iter,
+                                  time_limit=clock.remaining() if retry else None)
             try:
                 enforced, pas_e = enforce(model, max_iter=first_iter)
                 first = (enforced, pas_e, report)
@@ -194,7 +207,6 @@ def run_fit(
             # change is at least of the order of the margin: a fit exact to 1e-15 cannot
             # be enforced within 1.2x of it, and retrying cost 11 s on a 2-pole capacitor)
             bound = max(_ENFORCE_RATIO * max(unconstrained_rel, floor), 2 * margin)
-            clock = _RetryClock(enforce_time_limit)
 
             def wanted(first: tuple[RationalModel, PassivityReport, FitReport] | None
                        ) -> bool:
@@ -213,6 +225,14 @@ def run_fit(
                 note = clock.note(fit_errors(first[0], data)[1], bound)
                 warnings.warn(note, FitWarning, stacklevel=3)
                 first = (first[0], first[1], replace(first[2], notes=(*first[2].notes, note)))
+            if first is None and clock.stopped:
+                raise InputError(
+                    f"no certified passive model within the time limit of {clock.limit:g} "
+                    f"s: {failure}",
+                    source=data.source,
+                    expected="more time (--enforce-time-limit, 0: no limit), or a model "
+                    "that is cheaper to make passive: lower the order (--max-order)",
+                )
             if first is None:
                 raise InputError(
                     f"passivity enforcement found no certificate: {failure}",
@@ -239,10 +259,11 @@ def run_fit(
     return FitJobResult(data, model, report, pas, unconstrained_rel, rms, rel, art, dp)
 
 
-class _RetryClock:
-    """The time limit of the enforcement retries (``run_fit(enforce_time_limit=)``):
-    started after the first enforcement; :meth:`out` is True once it has passed. It is
-    asked only where a further enforcement would start, so a True answer is a retry cut
+class _EnforceClock:
+    """The time limit of passivity enforcement (``run_fit(enforce_time_limit=)``),
+    started before the first enforcement; :meth:`out` is True once it has passed. It is
+    asked where a further enforcement would start and by the enforcements themselves
+    before each convex program (:meth:`remaining`), so a True answer is a cut
     (``stopped``, which the fit note reports)."""
 
     def __init__(self, limit: float | None) -> None:
@@ -255,9 +276,15 @@ class _RetryClock:
             self.stopped = True
         return self.stopped
 
+    def remaining(self) -> float | None:
+        """Seconds left (0 once passed), None without a limit."""
+        if self.deadline is None:
+            return None
+        return max(self.deadline - time.monotonic(), 0.0)
+
     def note(self, err: float, bound: float) -> str:
-        return (f"passivity enforcement retries stopped at the time limit ({self.limit:g} s "
-                f"after the first enforcement; --enforce-time-limit): enforced error "
+        return (f"passivity enforcement stopped at the time limit ({self.limit:g} s; "
+                f"--enforce-time-limit): enforced error "
                 f"{err:.3g}" + (f" against the bound {bound:.3g}" if err > bound else ""))
 
 
@@ -357,7 +384,7 @@ def _relocation_retry(
     enforce: Enforce,
     max_iter: int,
     bound: float,
-    clock: _RetryClock,
+    clock: _EnforceClock,
 ) -> tuple[RationalModel, PassivityReport, FitReport] | None:
     """Relocate the poles against the enforced model out of band and enforce again
     (:func:`vfmodel.fitting.passive_relocation.relocate_passive`); keep the passive model
@@ -403,7 +430,7 @@ def _out_of_band_retry(
     enforce: Enforce,
     max_iter: int,
     bound: float,
-    clock: _RetryClock,
+    clock: _EnforceClock,
 ) -> tuple[RationalModel, PassivityReport, FitReport] | None:
     """Refit an S model with stronger out-of-band anchors and enforce again; keep the
     passive model closest to the data. Out-of-band excursions of a narrow-band fit (|S| of
