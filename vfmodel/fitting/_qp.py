@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -174,7 +173,7 @@ def solve_qp(
     # stall the solver) leaves the previous solution. Well-scaled programs are solved once
     # (an a-priori scale from the cuts alone blew the Gram matrix of an ill-conditioned
     # 3-point program up to 1e14 and its solves to 200 iterations).
-    solve_once = _primal_form(a_all, b_all, cones, attempts, bool(psd)) if \
+    solve_once = _primal_form(a_all, b_all, cones, attempts) if \
         (bool(psd) if primal is None else primal) else _dual_form(a_all, b_all, cones, attempts)
     statuses: list[str] = []
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
@@ -204,7 +203,6 @@ def _dual_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
     gram = sparse.triu(sparse.csc_matrix(a_dense @ a_dense.T), format="csc")
     m = a_dense.shape[0]
     neg_eye = -sparse.identity(m, format="csc")
-    attempts = _with_method(attempts, "faer" if m >= _DENSE_ROWS else "qdldl")
 
     def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
         return _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts, a_dense)
@@ -213,7 +211,7 @@ def _dual_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
 
 
 def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
-                 attempts: tuple[dict[str, Any], ...], exact: bool) -> _Form:
+                 attempts: tuple[dict[str, Any], ...]) -> _Form:
     """The program itself: minimise 1/2 ||y||^2 / scale subject to A y + s = b, s in the
     cones. Used with the exact per-frequency cones, whose dual Clarabel did not solve
     accurately: on the delayed-line model of tests/test_fit_robust.py
@@ -224,49 +222,11 @@ def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
     a = sparse.csc_matrix(a_all)
     n = a.shape[1]
     eye = sparse.identity(n, format="csc")
-    attempts = _with_method(attempts, "faer" if exact else "qdldl")
 
     def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
         return _run(eye / scale, np.zeros(n), a, b_all, cones, attempts, lambda x: x)
 
     return solve_once
-
-
-# Clarabel's factorisation of each program's linear systems, chosen by form and size
-# (Clarabel 0.11's default, "auto", takes the supernodal faer whenever it is built in):
-# dual programs of at least _DENSE_ROWS cuts (a dense Gram matrix) with faer, everything
-# else with QDLDL. Measured, one thread, the same iterations and objectives either way:
-# random dual programs of 300 / 500 / 650 / 2,000 cuts 0.066 / 0.26 / 0.62 / 21 s with
-# QDLDL against 0.048 / 0.12 / 0.26 / 2.9 s with faer, and a 4-port coupler's dual program
-# (2,402 cuts, 1,040 unknowns) 116 against 12 s; primal programs of 120 unknowns with 650
-# / 1,000 cuts 0.10 / 0.20 s with QDLDL against 0.31 / 0.51 s, 500 with 2,100 5.0 against
-# 6.9 s (mlin's fit --passive, 195 programs: 10.3 s in the solver with "auto", 5.8 s).
-_DENSE_ROWS = 300
-
-
-def _with_method(attempts: tuple[dict[str, Any], ...], method: str
-                 ) -> tuple[dict[str, Any], ...]:
-    """``attempts`` with Clarabel's ``direct_solve_method`` set (faer only when built in)."""
-    if method == "faer" and not _faer_available():
-        method = "qdldl"
-    return tuple({**extra, "direct_solve_method": method} for extra in attempts)
-
-
-@lru_cache(maxsize=1)
-def _faer_available() -> bool:
-    """Whether the installed Clarabel offers the faer factorisation (Clarabel >= 0.10)."""
-    import clarabel
-
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    try:
-        settings.direct_solve_method = "faer"
-        clarabel.DefaultSolver(sparse.csc_matrix(np.eye(1)), np.zeros(1),
-                               sparse.csc_matrix(-np.eye(1)), np.zeros(1),
-                               [clarabel.NonnegativeConeT(1)], settings).solve()
-    except Exception:  # an older Clarabel: unknown method
-        return False
-    return True
 
 
 _SMALL_OBJECTIVE = 1e-6  # scaled objective below which the program is solved again
