@@ -190,7 +190,7 @@ def run_fit(
             # the time limit covers every enforcement of the S models that get retries;
             # the others' single enforcement runs to its end (max_iter programs). A
             # 4-port coupler's first enforcement (64 poles, 2,400-2,900 cuts) ran for
-            # more than 14 minutes, its programs growing to 4-6 minutes each (measured
+            # more than 14 minutes, its programs growing to 3.5-6 minutes each (measured
             # with another job on the second core)
             clock = _EnforceClock(enforce_time_limit)
 
