@@ -91,3 +91,32 @@ def test_lossless_ladder_is_enforced_at_rounding(f: np.ndarray, sections: list[S
     floor = job.data_passivity.floor if job.data_passivity else 0.0
     bound = max(1.2 * max(job.unconstrained_rel_rms_error, floor), 2e-14)
     assert job.rel_rms_error <= bound
+
+
+@pytest.mark.parametrize(("large", "tests_at_most", "resolution"), [
+    (False, 9, 1 / 256),
+    (True, 4, 1 / 16),
+])
+def test_fraction_near_one_search(large: bool, tests_at_most: int, resolution: float,
+                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    # a stand-in Hamiltonian test certifying exactly the fractions t >= 0.999: the
+    # search brackets t within its resolution, and for models above _SHRINK_SIZE unknowns
+    # (whose tests near the passive boundary cost 7-9 s on the 8-port PDN) with fewer tests
+    model, data, f, _ = _case()
+    passive = RationalModel(model.poles, 0.5 * model.residues, model.dd, model.ee, kind="S")
+    certified, violated = check_passivity(passive), check_passivity(model)
+    r0, r1 = model.residues[0, 0, 0].real, passive.residues[0, 0, 0].real
+    tried: list[float] = []
+
+    def stand_in(m: RationalModel, method: str = "hamiltonian") -> object:
+        t = (m.residues[0, 0, 0].real - r0) / (r1 - r0)
+        tried.append(t)
+        return certified if t >= 0.999 else violated
+
+    monkeypatch.setattr(_enforce, "check_passivity", stand_in)
+    if large:
+        monkeypatch.setattr(_enforce, "_SHRINK_SIZE", 0)
+    best, _ = _enforce._shrink(model, passive, certified, f, data.values, "uniform", None)
+    t_best = (best.residues[0, 0, 0].real - r0) / (r1 - r0)
+    assert 0.999 <= t_best <= 0.999 + resolution
+    assert len(tried) <= tests_at_most

@@ -680,8 +680,9 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
     required margin at the cut frequencies (or the enforced model's there, where that is
     smaller), the documented meaning of ``enforce_passivity(margin=)``; None: the margin
     was the programs' device only and may be given back (``run_fit``'s default margin)."""
-    n_steps = _SHRINK_STEPS if model.n_in**2 * model.n_poles <= _SHRINK_SIZE \
-        else _SHRINK_STEPS // 2
+    large = model.n_in**2 * model.n_poles > _SHRINK_SIZE
+    n_steps = _SHRINK_STEPS // 2 if large else _SHRINK_STEPS
+    res = _SHRINK_RES_LARGE if large else _SHRINK_RES
     w = _weights(h_data, weighting, 1.0)
 
     def err(m: RationalModel) -> float:
@@ -713,7 +714,7 @@ def _shrink(model: RationalModel, passive: RationalModel, report: PassivityRepor
             e = err(cand)
             if e < best_err:
                 best, best_rep, best_err = cand, rep, e
-        if hi - lo <= _SHRINK_RES * hi:
+        if hi - lo <= res * hi:
             break
         if lo == 0.0:
             if hi <= _SHRINK_LEAST:
@@ -735,6 +736,12 @@ _SHRINK_STEPS = 20
 _SHRINK_SIZE = 4000  # ... half of them above this many residue unknowns (ports^2 x poles)
 _SHRINK_LEAST = 1e-16  # least fraction searched (below it the change is rounding)
 _SHRINK_RES = 1.0 / 256  # the bracket's width relative to its upper end at the stop
+# ... above _SHRINK_SIZE unknowns. The Hamiltonian test of a candidate close to passive
+# costs 8-10x that of one far from it (its sampling cross-check around eigenvalues near
+# the axis): with 1/256 the 8-port PDN of scripts/bench_pdn.py (94 poles, fraction near 1)
+# spent 30 of its 54 s in _shrink, its last candidates violating by 2e-3-6e-4 at 7-9 s a
+# test (session 37's search ended at 1.6e-2: 7 s, the whole fit 28 s)
+_SHRINK_RES_LARGE = 1.0 / 16
 _SHRINK_LOG = 2.0
 
 
