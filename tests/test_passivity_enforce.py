@@ -103,9 +103,9 @@ def test_direct_program_matches_cvxpy(monkeypatch: pytest.MonkeyPatch) -> None:
         orig = enforce_mod._solve
 
         def grab(setup: Any, a: Any, b: Any, scale: float = 1.0, psd: Any = (),
-                 _orig: Any = orig, _g: Any = grabbed) -> Any:
+                 deadline: Any = None, _orig: Any = orig, _g: Any = grabbed) -> Any:
             _g.append((setup, a, b))
-            return _orig(setup, a, b, scale=scale, psd=psd)
+            return _orig(setup, a, b, scale=scale, psd=psd, deadline=deadline)
 
         monkeypatch.setattr(enforce_mod, "_solve", grab)
         enforce_passivity(model)

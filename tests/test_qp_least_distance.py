@@ -4,6 +4,8 @@ NNLS reduction."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from scipy import optimize, sparse
@@ -47,3 +49,21 @@ def test_least_distance_solution(n: int, m: int, primal: bool) -> None:
     ref = _ldp_reference(g, h)
     assert np.min(g @ x - h) >= -1e-6 * np.max(np.abs(h))  # feasible
     np.testing.assert_allclose(x, ref, rtol=0, atol=1e-5 * float(np.linalg.norm(ref)))
+
+
+def test_deadline_stops_a_program() -> None:
+    # a deadline already past: no attempt starts; one a few ms ahead: Clarabel's own
+    # time limit ends the program well before the unlimited solve of the same program
+    g, h = _program(300, 1000, seed=7)
+    args = (sparse.identity(300, format="csr"), 300, g, h, None, _DIRECT)
+    x, statuses = _qp.solve_qp(*args, deadline=time.monotonic() - 1.0)
+    assert x is None and statuses == ["time limit"]
+    t0 = time.perf_counter()
+    full, _ = _qp.solve_qp(*args)
+    t_full = time.perf_counter() - t0
+    assert full is not None
+    t0 = time.perf_counter()
+    cut, statuses = _qp.solve_qp(*args, deadline=time.monotonic() + 0.01 * t_full)
+    t_cut = time.perf_counter() - t0
+    assert cut is None and statuses[-1] == "time limit", statuses
+    assert t_cut < 0.5 * t_full, (t_cut, t_full)

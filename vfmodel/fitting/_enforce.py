@@ -614,7 +614,14 @@ def enforce(
         cones.update(zip(new_f[coned], exact, strict=True))
         a_all, b_all = np.vstack([a_all, a_new]), np.concatenate([b_all, b_new])
         slack = np.concatenate([slack, np.zeros(b_new.size, dtype=int)])
-        x_val = _solve(setup, a_all, b_all, scale=scale, psd=tuple(cones.values()))
+        # the first program always runs to its end; later ones stop at the deadline
+        x_val = _solve(setup, a_all, b_all, scale=scale, psd=tuple(cones.values()),
+                       deadline=deadline if it > 1 else None)
+        if x_val is None:
+            raise PassivityError(
+                f"passivity not certified when the time limit passed (during convex "
+                f"program {it})"
+            )
         scale = float(np.sum((setup.r_blocks @ x_val) ** 2))
         current = setup.apply(x_val)
         # drop cuts far from active (they only cost solver time); a dropped cut that
@@ -778,8 +785,10 @@ def _constant_projection(model: RationalModel) -> tuple[RationalModel, Passivity
 
 
 def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0,
-           psd: tuple[PsdBlock, ...] = ()) -> FloatArray:
-    """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x.
+           psd: tuple[PsdBlock, ...] = (), deadline: float | None = None
+           ) -> FloatArray | None:
+    """One QP: minimise ||R x|| subject to the cuts ``a x >= b``; returns x, or None when
+    ``deadline`` (``time.monotonic()``) passed before Clarabel ended.
 
     Clarabel directly (:mod:`vfmodel.fitting._qp`); cvxpy with the same solver only when
     that ends without a solution."""
@@ -791,9 +800,11 @@ def _solve(setup: _Setup, a: FloatArray, b: FloatArray, scale: float = 1.0,
         dc = DConstraint(m.kind, m.dd / setup.h0, last, float(setup.col[-1]), bound)
     primal = bool(psd) or a.shape[0] > max(_PRIMAL_ROWS, _PRIMAL_TALL * a.shape[1])
     x, _ = solve_qp(setup.r_blocks, setup.n_b, a, b, dc, _PRIMAL if primal else _DIRECT,
-                    scale, psd, primal)
+                    scale, psd, primal, deadline)
     if x is not None:
         return x
+    if deadline is not None and time.monotonic() > deadline:
+        return None
     return _solve_cvxpy(setup, a, b, psd)
 
 

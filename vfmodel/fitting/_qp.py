@@ -18,6 +18,7 @@ with quadratic objectives", arXiv:2405.12762 (2024).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -127,6 +128,7 @@ def solve_qp(
     scale: float = 1.0,
     psd: tuple[PsdBlock, ...] = (),
     primal: bool | None = None,
+    deadline: float | None = None,
 ) -> tuple[FloatArray | None, list[str]]:
     """Minimise ||R x||^2 subject to ``a x >= b``, ``d_constraint`` and the blocks ``psd``.
 
@@ -173,8 +175,9 @@ def solve_qp(
     # stall the solver) leaves the previous solution. Well-scaled programs are solved once
     # (an a-priori scale from the cuts alone blew the Gram matrix of an ill-conditioned
     # 3-point program up to 1e14 and its solves to 200 iterations).
-    solve_once = _primal_form(a_all, b_all, cones, attempts) if \
-        (bool(psd) if primal is None else primal) else _dual_form(a_all, b_all, cones, attempts)
+    solve_once = _primal_form(a_all, b_all, cones, attempts, deadline) if \
+        (bool(psd) if primal is None else primal) else \
+        _dual_form(a_all, b_all, cones, attempts, deadline)
     statuses: list[str] = []
     scale = scale if np.isfinite(scale) and scale > 0 else 1.0
     best: FloatArray | None = None
@@ -195,7 +198,7 @@ _Form = Callable[[float], tuple[FloatArray | None, list[str]]]
 
 
 def _dual_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
-               attempts: tuple[dict[str, Any], ...]) -> _Form:
+               attempts: tuple[dict[str, Any], ...], deadline: float | None) -> _Form:
     """The program as its dual: y = -A^T z with z in the (self-dual) cones minimising
     1/2 z^T (A A^T) z + b^T z -- as many unknowns as constraints (a dense Gram matrix),
     few next to the unknowns of an 8-port model with 100 poles (6,000)."""
@@ -205,13 +208,14 @@ def _dual_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
     neg_eye = -sparse.identity(m, format="csc")
 
     def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
-        return _solve_dual(gram / scale, b_all / scale, neg_eye, cones, attempts, a_dense)
+        return _run(gram / scale, b_all / scale, neg_eye, np.zeros(m), cones, attempts,
+                    lambda z: -(a_dense.T @ z), deadline)
 
     return solve_once
 
 
 def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
-                 attempts: tuple[dict[str, Any], ...]) -> _Form:
+                 attempts: tuple[dict[str, Any], ...], deadline: float | None) -> _Form:
     """The program itself: minimise 1/2 ||y||^2 / scale subject to A y + s = b, s in the
     cones. Used with the exact per-frequency cones, whose dual Clarabel did not solve
     accurately: on the delayed-line model of tests/test_fit_robust.py
@@ -224,26 +228,14 @@ def _primal_form(a_all: sparse.csr_matrix, b_all: FloatArray, cones: list[Any],
     eye = sparse.identity(n, format="csc")
 
     def solve_once(scale: float) -> tuple[FloatArray | None, list[str]]:
-        return _run(eye / scale, np.zeros(n), a, b_all, cones, attempts, lambda x: x)
+        return _run(eye / scale, np.zeros(n), a, b_all, cones, attempts, lambda x: x,
+                    deadline)
 
     return solve_once
 
 
 _SMALL_OBJECTIVE = 1e-6  # scaled objective below which the program is solved again
 _RESCALES = 2
-
-
-def _solve_dual(
-    gram: sparse.csc_matrix,
-    q: FloatArray,
-    neg_eye: sparse.csc_matrix,
-    cones: list[Any],
-    attempts: tuple[dict[str, Any], ...],
-    a_dense: FloatArray,
-) -> tuple[FloatArray | None, list[str]]:
-    """One dual program (settings tried in turn); y = -A^T z and the statuses."""
-    return _run(gram, q, neg_eye, np.zeros(gram.shape[0]), cones, attempts,
-                lambda z: -(a_dense.T @ z))
 
 
 def _run(
@@ -254,9 +246,12 @@ def _run(
     cones: list[Any],
     attempts: tuple[dict[str, Any], ...],
     to_y: Callable[[FloatArray], FloatArray],
+    deadline: float | None = None,
 ) -> tuple[FloatArray | None, list[str]]:
     """One Clarabel program, settings tried in turn until "Solved" (else the last
-    "AlmostSolved" point); ``to_y`` maps its solution to y. Returns y and the statuses."""
+    "AlmostSolved" point); ``to_y`` maps its solution to y. Returns y and the statuses.
+    ``deadline`` (``time.monotonic()``): Clarabel's own time limit is set to the time left,
+    and no further attempt starts once it has passed."""
     import clarabel
 
     statuses: list[str] = []
@@ -266,6 +261,12 @@ def _run(
         settings.verbose = False
         for key, val in extra.items():
             setattr(settings, key, val)
+        if deadline is not None:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                statuses.append("time limit")
+                break
+            settings.time_limit = left
         try:
             sol = clarabel.DefaultSolver(p, q, a, b, cones, settings).solve()
         except Exception as err:  # the solver's own errors (e.g. a failed factorisation)
