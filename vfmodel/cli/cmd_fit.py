@@ -82,10 +82,10 @@ def _order(value: str) -> int | str:
               "the final model may give it back].")
 @click.option("--enforce-time-limit", type=click.FloatRange(min=0), default=ENFORCE_TIME_LIMIT,
               show_default=True, help="Seconds from the start of passivity enforcement "
-              "after which no further convex program starts (S data of at most 4 ports: "
-              "the first enforcement and its retries for an enforced error within 1.2x of "
-              "max(fit error, data floor)); no certified model by then exits 2; 0: no "
-              "limit.")
+              "after which the running convex program stops and no further one starts (S "
+              "data of at most 4 ports: the first enforcement and its retries for an "
+              "enforced error within 1.2x of max(fit error, data floor)); no certified "
+              "model by then exits 2; 0: no limit.")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Also write a SPICE subcircuit '.subckt NAME p1..pN ref'.")
 @click.option("--subckt-name", default="vfmodel", show_default=True,

@@ -507,7 +507,8 @@ def enforce(
     deadline: float | None = None,
 ) -> tuple[RationalModel, PassivityReport]:
     """Implementation of :func:`vfmodel.fitting.passivity.enforce_passivity`
-    (``deadline``: a ``time.monotonic()`` value after which no further program starts)."""
+    (``deadline``: a ``time.monotonic()`` value after which the running program stops
+    and no further one starts; the first program always runs to its end)."""
     if weighting not in ("relative", "uniform"):
         raise InputError(
             "weighting: unknown choice", found=repr(weighting),

@@ -536,7 +536,8 @@ def enforce_passivity(
         ``progress(stage, done, total)`` once per convex program (programs of a many-pole
         model can take seconds to a minute each).
     time_limit : float, optional
-        Seconds after which no further convex program starts (the first always runs);
+        Seconds after which the running convex program stops and no further one starts
+        (the first always runs to its end);
         a model not certified by then raises :class:`PassivityError`. None: no limit.
 
     Returns

@@ -122,10 +122,10 @@ def run_fit(
     reported as an :class:`InputError` naming the options that control it.
     ``enforce_margin`` None: 1e-6, or a tenth of max(fit error, data floor) when that is
     smaller, at least 1e-10 (:func:`enforce_margin_for`). ``enforce_time_limit``: seconds
-    from the start of passivity enforcement after which no further convex program starts
-    (S models of at most 4 ports, which get retries; None or 0: no limit); a model kept
-    because of it carries a note saying so, and no certified model by then is an
-    :class:`InputError` naming the option.
+    from the start of passivity enforcement after which the running convex program stops
+    and no further one starts (S models of at most 4 ports, which get retries; None or 0:
+    no limit); a model kept because of it carries a note saying so, and no certified model
+    by then is an :class:`InputError` naming the option.
     """
     if enforce_time_limit is not None and not enforce_time_limit >= 0:  # NaN too
         raise InputError("enforce_time_limit must be a number of seconds >= 0 (0: no limit)",
