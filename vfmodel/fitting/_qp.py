@@ -138,10 +138,14 @@ def solve_qp(
     program's of a cutting-plane loop, whose optimum only grows as cuts are added), so
     that one solve is well scaled (see below). ``primal``: solve the program itself
     (:func:`_primal_form`) instead of its dual (:func:`_dual_form`); default: with
-    ``psd`` blocks only. Returns (x or None, the statuses).
+    ``psd`` blocks only. ``deadline`` (``time.monotonic()``): none of it is built once
+    that has passed, and Clarabel stops at it (:func:`_run`). Returns (x or None, the
+    statuses).
     """
     import clarabel
 
+    if deadline is not None and time.monotonic() > deadline:
+        return None, ["time limit"]
     n_var = a.shape[1]
     # variables y = R x: the objective becomes ||y||^2 (P = I), the cuts a R^-1
     rinv = _block_inverse(r_blocks, block)

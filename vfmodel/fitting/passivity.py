@@ -537,8 +537,8 @@ def enforce_passivity(
         model can take seconds to a minute each).
     time_limit : float, optional
         Seconds after which the running convex program stops and no further one starts
-        (the first always runs to its end);
-        a model not certified by then raises :class:`PassivityError`. None: no limit.
+        (the first always runs to its end); a model not certified by then raises
+        :class:`PassivityError`. None: no limit.
 
     Returns
     -------
