@@ -24,6 +24,26 @@ passive and follow the band, so the relocated poles no longer need to be bent by
 next enforcement; the out-of-band samples are taken from the enforced model because the
 data say nothing there. Background on passive macromodels and their enforcement: [1].
 
+The targets are not the data: the enforced model is off in the band by what its
+enforcement cost, and its response carries that error to the band's edges and between
+the samples. Held at a fixed weight, the relocated fits of noise-free simulated files
+can stay several times above the unconstrained fit's error round after round
+(hfss_twoport, 75-110 GHz: 9.9e-6 after 16 rounds against a fit of 2.3e-6; each
+round's enforcement changed it by less than 1 %, so the targets, not the enforcement,
+held it there). With ``continuation`` (session 40):
+
+- the targets between the samples are the unconstrained fit's (its error there is the
+  fit's), not the enforced model's;
+- the targets' weight is a continuation: divided by 3 after a round whose enforcement
+  changed the relocated fit's error by at most 10 % (the targets kept it nearly
+  passive: loosen them), doubled (at most 1) after one that changed it more.
+
+hfss_twoport then ends at 0.874x its fit error (21 poles, 5 s, from the enforced fit).
+The continuation is not always better: run in place of the fixed weight,
+Clarity_example (40 points) ended at 2.2x against the fixed weight's 1.66x (its loosened
+fits of up to 53 poles interpolate the samples and their enforcements fail). The fit job
+therefore runs it after the fixed-weight rounds, from the best passive model they found.
+
 References
 ----------
 .. [1] S. Grivet-Talocia, B. Gustavsen, "Passive Macromodeling", Wiley (2016),
@@ -56,6 +76,9 @@ _RELOCATIONS = 5  # pole relocations per round
 # ended at 2.6x or 12x its fit error as the 15-pole round's enforcement was certified
 # or not after a change of rounding in the enforcement's last step
 _FAILED = 2
+_LOOSEN = 3.0  # continuation of the targets' weight: divided by this after a cheap round
+_CHEAP = 1.1  # ... one whose enforced error is at most this times the relocated fit's
+_PATIENCE = 4  # the continuation ends after this many rounds without a closer model
 
 
 def _grid(f_hz: FloatArray) -> FloatArray:
@@ -78,6 +101,7 @@ def relocate_passive(
     good_enough: float = 0.0,
     initial: RationalModel | None = None,
     stop: Callable[[], bool] | None = None,
+    continuation: bool = False,
 ) -> tuple[RationalModel, float] | None:
     """The passive model closest to ``data`` (relative RMS error) over ``rounds`` rounds
     of enforcement and relocation (module docstring), with its error; None when no
@@ -89,6 +113,8 @@ def relocate_passive(
     whose response gives the first targets instead of the enforcement of ``model`` (which
     can fail or take minutes). ``stop``: asked before each further round; True ends the
     rounds (the best so far is returned; e.g. a time limit that records the cut).
+    ``continuation``: targets between the samples from ``model`` and a weight that is
+    loosened while the enforcements stay cheap (module docstring).
     """
     tau = float(model.delay or 0.0)
     f = data.freq_hz
@@ -108,28 +134,41 @@ def relocate_passive(
                         pole_bounds=_pole_bounds(data, omega_scale), ridge=_RIDGE)
     grid = _grid(f)
     s_grid = np.asarray(2j * np.pi * grid / omega_scale, dtype=complex)
+    between = (grid >= f[0]) & (grid <= f[-1])  # between the data frequencies
+    h_between = (model.without_delay() if tau else model)(grid[between]) \
+        if continuation else None
     w_lo = float(prob.s[prob.s.imag > 0][0].imag)
     best: tuple[RationalModel, float] | None = None
     current = model
     last: RationalModel | None = None  # the last passive model: the targets
     failed = 0  # enforcements failed in a row
+    weight = out_weight
+    relocated = np.inf  # error of the relocated fit enforced last
+    since = 0  # rounds since the closest model so far
     for k in range(rounds + 1):
         passive = initial if k == 0 and initial is not None else enforce(current)
         if passive is not None:
             last, failed = passive, 0
             err = fit_errors(passive, data)[1]
+            if continuation and k > 0:
+                weight = weight / _LOOSEN if err <= _CHEAP * relocated \
+                    else min(2 * weight, 1.0)
             if best is None or err < best[1]:
-                best = (passive, err)
+                best, since = (passive, err), -1
         else:
             failed += 1
+        since += 1
         if k == rounds or last is None or failed > _FAILED \
+                or (continuation and since >= _PATIENCE) \
                 or (best is not None and best[1] <= good_enough) \
                 or (stop is not None and stop()):
             break
-        targets = last.without_delay()(grid).reshape(grid.size, -1) if tau else \
-            last(grid).reshape(grid.size, -1)
-        aug = replace(prob, s=np.concatenate([prob.s, s_grid]), h=np.concatenate([h, targets]),
-                      w=np.concatenate([prob.w, np.full((grid.size, 1), out_weight)]))
+        targets = last.without_delay()(grid) if tau else last(grid)
+        if h_between is not None:
+            targets[between] = h_between
+        aug = replace(prob, s=np.concatenate([prob.s, s_grid]),
+                      h=np.concatenate([h, targets.reshape(grid.size, -1)]),
+                      w=np.concatenate([prob.w, np.full((grid.size, 1), weight)]))
         reps = core.sort_reps(current.poles[current.poles.imag >= 0] / omega_scale)
         new = _order._new_poles(prob, core.solve_residues(prob, reps), 1, w_lo)
         reps = core.sort_reps(np.concatenate([reps, new]))
@@ -138,4 +177,6 @@ def relocate_passive(
         if tau:
             current = RationalModel(current.poles, current.residues, current.dd, current.ee,
                                     current.kind, current.z0, delay=tau)
+        if continuation:
+            relocated = fit_errors(current, data)[1]
     return best
