@@ -18,7 +18,7 @@ from vfmodel.errors import PassivityError, SolverError
 from vfmodel.fitting.passive_relocation import relocate_passive
 from vfmodel.fitting.passivity import check_passivity, enforce_passivity
 from vfmodel.fitting.vectfit import fit_errors, vector_fit
-from vfmodel.pipeline.fit_job import run_fit
+from vfmodel.pipeline.fit_job import enforce_margin_for, run_fit
 
 VFBENCH = Path(__file__).resolve().parents[1] / "data" / "vfbench"
 
@@ -200,7 +200,8 @@ def test_continuation_reaches_the_fit_error() -> None:
         if check_passivity(m).passive:
             return m
         try:  # as the fit job: a round whose enforcement fails is not kept
-            return enforce_passivity(m, data, margin=0.1 * fit_err, allow_active=True,
+            return enforce_passivity(m, data, margin=enforce_margin_for(fit_err, 0.0),
+                                     allow_active=True,
                                      keep_margin=False, weighting="uniform", max_iter=15)[0]
         except (PassivityError, SolverError):
             return None
@@ -212,3 +213,24 @@ def test_continuation_reaches_the_fit_error() -> None:
     assert check_passivity(passive).passive
     assert err <= 1.2 * fit_err
     assert _dense_sigma(passive, data.freq_hz) <= 1 + 1e-9
+
+
+@pytest.mark.parametrize(("continuation", "calls"), [(False, 8), (True, 4)])
+def test_continuation_ends_without_a_closer_model(continuation: bool, calls: int) -> None:
+    # the continuation ends after _PATIENCE (4) rounds that bring no model closer to the
+    # data; the fixed weight runs its rounds. Reference: call counts of a stand-in
+    # enforcement that always returns the initial passive model (never closer)
+    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, _ = vector_fit(data, order=8)
+    seen: list[RationalModel] = []
+
+    def enforce(m: RationalModel) -> RationalModel | None:
+        seen.append(m)
+        return model
+
+    found = relocate_passive(model, data, enforce, rounds=8, initial=model,
+                             continuation=continuation)
+    assert found is not None and found[0] is model
+    assert len(seen) == calls

@@ -149,17 +149,19 @@ def relocate_passive(
     since = 0  # rounds since the closest model so far
     for k in range(rounds + 1):
         passive = initial if k == 0 and initial is not None else enforce(current)
+        closer = False
         if passive is not None:
             last, failed = passive, 0
             err = fit_errors(passive, data)[1]
             if continuation and k > 0:
                 weight = weight / _LOOSEN if err <= _CHEAP * relocated \
                     else min(2 * weight, 1.0)
-            if best is None or err < best[1]:
-                best, since = (passive, err), -1
+            closer = best is None or err < best[1]
+            if closer:
+                best = (passive, err)
         else:
             failed += 1
-        since += 1
+        since = 0 if closer else since + 1
         if k == rounds or last is None or failed > _FAILED \
                 or (continuation and since >= _PATIENCE) \
                 or (best is not None and best[1] <= good_enough) \

@@ -314,12 +314,14 @@ _RELOCATE_PORTS = 3
 # 61 poles took ~8 s per program, i.e. minutes per round
 _RELOCATE_UNKNOWNS = 300
 _RELOCATE_ROUNDS = 16
-# the continuation's start alone (passive_relocation, session 40) for the other S models
-# the retries take (4 ports) of at most this many residue unknowns. Measured, one BLAS
-# thread, enforced error / max(fit error, data floor), before -> after (run_fit time):
-# M_Strip 3.46x -> 1.31x (301 s), milanofthe 4port 1.69x -> 1.33x (70 s), front_face
-# 25.5x -> 2.58x (301 s), Ideal_TRL 2.38x -> 1.72x (301 s), PetraM 240x unchanged (301 s);
-# the fixed-weight starts for 4 ports ran to the time limit for less (session 37)
+# the continuation's start alone (passive_relocation, session 40) for the retried S models
+# beyond those limits (4 ports, or 300-800 residue unknowns). Measured, one BLAS thread,
+# enforced error / max(fit error, data floor), before -> after (run_fit time): M_Strip
+# 3.46x -> 1.31x (301 s), milanofthe 4port 1.69x -> 1.33x (70 s), front_face 25.5x ->
+# 2.58x (301 s), Ideal_TRL 2.38x -> 1.13x (302 s, at the limit: 1.72x under more load);
+# 2 ports: S1 (106 poles) 36x (26 s) -> 17.8x (304 s), Spiral_Inductor's CLI fit (78
+# poles) 5.27x (46 s) -> 4.26x (303 s). The fixed-weight starts for 4 ports ran to the
+# time limit for less (session 37); the continuation spends it on files beyond 1.2x
 _CONTINUATION_UNKNOWNS = 800
 _RELOCATE_WEIGHT = 0.1  # weight of the passive out-of-band targets relative to the data
 
