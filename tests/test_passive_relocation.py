@@ -33,6 +33,15 @@ def _dense_sigma(model: RationalModel, f_data: np.ndarray) -> float:
     return worst
 
 
+def _coaxial_fit() -> tuple[FrequencyData, RationalModel]:
+    """vfbench's coaxial.s2p and an 8-pole fit of it: the model of the call-count tests."""
+    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, _ = vector_fit(data, order=8)
+    return data, model
+
+
 @pytest.mark.parametrize("name", ["coaxial.s2p", "circuit_vi_Coaxial_T.s3p"])
 def test_fit_passive_within_bound(name: str) -> None:
     """Before the relocation: 1.53x (coaxial, 2 ports, 101 points) and 2.47x
@@ -97,10 +106,7 @@ def test_stop_is_asked_only_before_a_further_round() -> None:
     # the time limit of fit --passive reports a cut when its stop() answers True: it must
     # be asked only where another round (an enforcement) would start. Reference: call
     # counts of a stand-in enforcement that returns the model as it is
-    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model, _ = vector_fit(data, order=8)
+    data, model = _coaxial_fit()
     enforced: list[int] = []
     asked: list[int] = []
 
@@ -128,10 +134,7 @@ def test_rounds_go_on_after_a_failed_enforcement(fails: set[int], calls: int) ->
     # model's targets, at most twice in a row; the code before ended at the first (2
     # calls), which left wr2p2,line.s2p at 12x instead of 2x its fit error. Reference: call
     # counts of a stand-in enforcement (returns the model, or None on the calls `fails`)
-    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model, _ = vector_fit(data, order=8)
+    data, model = _coaxial_fit()
     seen: list[RationalModel] = []
 
     def enforce(m: RationalModel) -> RationalModel | None:
@@ -220,10 +223,7 @@ def test_continuation_ends_without_a_closer_model(continuation: bool, calls: int
     # the continuation ends after _PATIENCE (4) rounds that bring no model closer to the
     # data; the fixed weight runs its rounds. Reference: call counts of a stand-in
     # enforcement that always returns the initial passive model (never closer)
-    data = read_spectrum(VFBENCH / "coaxial.s2p").to_kind("S")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model, _ = vector_fit(data, order=8)
+    data, model = _coaxial_fit()
     seen: list[RationalModel] = []
 
     def enforce(m: RationalModel) -> RationalModel | None:
