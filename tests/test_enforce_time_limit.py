@@ -32,8 +32,8 @@ class _PassesAfterFirst(fit_job._EnforceClock):
     """A clock whose limit passes right after the first enforcement: no limit inside it,
     none left when the retries ask (deterministic, unlike a wall-clock limit)."""
 
-    def __init__(self, limit: float | None) -> None:
-        super().__init__(limit)
+    def __init__(self, limit: float | None, hold: float = 0.0) -> None:
+        super().__init__(limit, hold)
         self.asked = False
 
     def out(self) -> bool:

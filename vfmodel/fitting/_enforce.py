@@ -461,6 +461,38 @@ def _weights(h_data: ComplexArray, weighting: str, h0: float) -> FloatArray:
     return np.full(h_data.shape, 1.0 / h0)
 
 
+def _entry_systems(
+    setup_model: RationalModel,
+    f: FloatArray,
+    h_data: ComplexArray,
+    weighting: str,
+    perturb_d: bool,
+    h0: float,
+) -> tuple[FloatArray, list[FloatArray], list[FloatArray]]:
+    """Column scale and, per entry (i, j) in row-major order, the weighted basis in its
+    real form (2 n_f, n_b) and the weight per real row (the programs' objective is
+    ||A_ij x_ij||^2 + ||t ||A_ij|| x_ij||^2, t = ``_TIKHONOV``)."""
+    n = setup_model.n_in
+    wts = _weights(h_data, weighting, h0) / np.sqrt(f.size)
+    phi_d = _basis(setup_model.poles, 2j * np.pi * f, perturb_d)
+    col = np.max(np.abs(phi_d), axis=0)
+    col = np.where(col > 0, col, 1.0)
+    phi_d = phi_d / col
+    systems: list[FloatArray] = []
+    weights: list[FloatArray] = []
+    cache: dict[bytes, FloatArray] = {}
+    for i in range(n):
+        for j in range(n):
+            w_ij = wts[:, i, j] * h0
+            key = w_ij.tobytes()
+            if key not in cache:
+                a = w_ij[:, None] * phi_d
+                cache[key] = np.vstack([a.real, a.imag])
+            systems.append(cache[key])
+            weights.append(np.concatenate([w_ij, w_ij]))
+    return col, systems, weights
+
+
 def _objective(
     setup_model: RationalModel,
     f: FloatArray,
@@ -470,27 +502,16 @@ def _objective(
     h0: float,
 ) -> tuple[FloatArray, sparse.csr_matrix]:
     """Column scale and the block-diagonal QR-reduced objective (see module docstring)."""
-    n = setup_model.n_in
-    wts = _weights(h_data, weighting, h0) / np.sqrt(f.size)
-    phi_d = _basis(setup_model.poles, 2j * np.pi * f, perturb_d)
-    col = np.max(np.abs(phi_d), axis=0)
-    col = np.where(col > 0, col, 1.0)
-    phi_d = phi_d / col
-    n_b = phi_d.shape[1]
+    col, systems, _ = _entry_systems(setup_model, f, h_data, weighting, perturb_d, h0)
+    n_b = col.size
     blocks: list[FloatArray] = []
-    cache: dict[bytes, FloatArray] = {}
-    for i in range(n):
-        for j in range(n):
-            w_ij = wts[:, i, j] * h0
-            key = w_ij.tobytes()
-            if key not in cache:
-                a = w_ij[:, None] * phi_d
-                a_ri = np.vstack([a.real, a.imag])
-                reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(n_b)
-                cache[key] = np.asarray(
-                    np.linalg.qr(np.vstack([a_ri, reg]), mode="r"), dtype=float
-                )
-            blocks.append(cache[key])
+    cache: dict[int, FloatArray] = {}
+    for a_ri in systems:
+        if id(a_ri) not in cache:
+            reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(n_b)
+            cache[id(a_ri)] = np.asarray(np.linalg.qr(np.vstack([a_ri, reg]), mode="r"),
+                                         dtype=float)
+        blocks.append(cache[id(a_ri)])
     return col, sparse.block_diag(blocks, format="csr")
 
 
