@@ -19,7 +19,7 @@ import numpy as np
 from scipy import sparse
 
 from vfmodel import RationalModel
-from vfmodel.fitting._enforce import _objective, _to_residues
+from vfmodel.fitting._enforce import _entry_systems, _objective, _to_residues
 from vfmodel.fitting._hamiltonian import scaled_model
 
 
@@ -40,7 +40,8 @@ def bounded_real_optimum(model: RationalModel, f: np.ndarray, h: np.ndarray,
     """The passive model (||H||_inf <= gamma) with the poles of ``model`` nearest to ``h``
     in the enforcement's objective (uniform weights, the same scaled unknowns)."""
     n = model.n_in
-    col, r_blocks = _objective(model, f, h, "uniform", True, 1.0)
+    col, systems, _ = _entry_systems(model, f, h, "uniform", True, 1.0)
+    r_blocks = _objective(systems)
     n_b = col.size
     # the project's realisation of the model with frequency scaled by w0, each pole's
     # states scaled to a unit Gramian diagonal (sqrt(2 |Re p|)), which the SDP needs

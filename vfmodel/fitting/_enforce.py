@@ -493,26 +493,23 @@ def _entry_systems(
     return col, systems, weights
 
 
-def _objective(
-    setup_model: RationalModel,
-    f: FloatArray,
-    h_data: ComplexArray,
-    weighting: str,
-    perturb_d: bool,
-    h0: float,
-) -> tuple[FloatArray, sparse.csr_matrix]:
-    """Column scale and the block-diagonal QR-reduced objective (see module docstring)."""
-    col, systems, _ = _entry_systems(setup_model, f, h_data, weighting, perturb_d, h0)
-    n_b = col.size
+def _tikhonov(a_ri: FloatArray) -> FloatArray:
+    """The programs' Tikhonov rows for the weighted basis ``a_ri``: ``_TIKHONOV`` times
+    its largest singular value, times the identity."""
+    return np.asarray(_TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(a_ri.shape[1]), dtype=float)
+
+
+def _objective(systems: list[FloatArray]) -> sparse.csr_matrix:
+    """The block-diagonal QR-reduced objective (see module docstring) of the entries'
+    weighted bases (:func:`_entry_systems`)."""
     blocks: list[FloatArray] = []
     cache: dict[int, FloatArray] = {}
     for a_ri in systems:
         if id(a_ri) not in cache:
-            reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(n_b)
-            cache[id(a_ri)] = np.asarray(np.linalg.qr(np.vstack([a_ri, reg]), mode="r"),
-                                         dtype=float)
+            cache[id(a_ri)] = np.asarray(
+                np.linalg.qr(np.vstack([a_ri, _tikhonov(a_ri)]), mode="r"), dtype=float)
         blocks.append(cache[id(a_ri)])
-    return col, sparse.block_diag(blocks, format="csr")
+    return sparse.block_diag(blocks, format="csr")
 
 
 def enforce(
@@ -587,7 +584,8 @@ def enforce(
         f, h_data = data.freq_hz, data.values
     h0 = 1.0 if model.kind == "S" else float(np.sqrt(np.mean(np.abs(h_data) ** 2)))
     h0 = h0 if h0 > 0 else 1.0
-    col, r_blocks = _objective(model, f, h_data, weighting, perturb_d, h0)
+    col, systems, _ = _entry_systems(model, f, h_data, weighting, perturb_d, h0)
+    r_blocks = _objective(systems)
 
     grid = _grid(model, f)
     h_grid = _response(model, grid)

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
-from vfmodel.fitting._enforce import _TIKHONOV, _entry_systems, _response, _to_residues
+from vfmodel.fitting._enforce import _entry_systems, _response, _tikhonov, _to_residues
 
 FloatArray = NDArray[np.float64]
 
@@ -49,8 +49,7 @@ def centred_on_data(model: RationalModel, data: FrequencyData, *, weighting: str
     for k, (a_ri, w) in enumerate(zip(systems, weights, strict=True)):
         i, j = divmod(k, n)
         y = np.concatenate([gap[:, i, j].real, gap[:, i, j].imag]) * w
-        reg = _TIKHONOV * np.linalg.norm(a_ri, 2) * np.eye(col.size)
-        lhs = np.vstack([a_ri, reg])
+        lhs = np.vstack([a_ri, _tikhonov(a_ri)])
         rhs = np.concatenate([y, np.zeros(col.size)])
         x[:, i, j] = np.linalg.lstsq(lhs, rhs, rcond=None)[0] / col
     dr, dd = _to_residues(rational.poles, x, n)
