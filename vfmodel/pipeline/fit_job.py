@@ -492,10 +492,10 @@ def _polish_retry(
             continue
         err = fit_errors(enforced, data)[1]
         if check.passive and err < best_err:
-            report = best[2]
-            reason = (f"{report.order_reason}; the residues were refitted to the data under "
-                      f"the passivity constraint ({enforced.n_poles} poles)")
-            best = (enforced, check, replace(report, order=enforced.n_poles,
+            added = ", real poles added out of band" if extend else ""
+            reason = (f"{first[2].order_reason}; the residues were refitted to the data "
+                      f"under the passivity constraint ({enforced.n_poles} poles{added})")
+            best = (enforced, check, replace(first[2], order=enforced.n_poles,
                                              order_reason=reason))
             best_err = err
     return best
