@@ -50,10 +50,11 @@ def test_polish_reaches_the_data_optimum_from_any_passive_start() -> None:
     optimum = bounded_real_optimum(fit, data.freq_hz, data.values, 1.0 - margin)
     e_opt = fit_errors(optimum, data)[1]
     # measured (SkylakeX, Haswell, Sandybridge kernels): start 0.1014, polished 0.015141,
-    # the optimum 0.015141; the 10 %-off model enforced directly 0.1011
+    # the optimum 0.015141; the fit scaled by 0.9 and enforced directly 0.1011
     assert e_pol <= 0.2 * e_start, (e_pol, e_start)
     assert e_pol <= 1.01 * e_opt, (e_pol, e_opt)
-    # the direct enforcement of the 10 %-off model stays near it (the old objective)
+    # the enforcement alone keeps a 10 %-off model near itself: the fit scaled by 0.9 (not
+    # passive; the passive start above would be returned unchanged) enforced directly
     direct, _ = enforce_passivity(_scaled(fit, 0.9), data=data, margin=margin,
                                   keep_margin=False, weighting="uniform")
     assert fit_errors(direct, data)[1] >= 3 * e_pol
@@ -108,9 +109,14 @@ def test_fit_job_polish_step_and_its_share_of_the_time_limit() -> None:
     # the step at the poles reaches the optimum there (0.015141 above; the step with real
     # poles added out of band gains nothing on this model: 0.015141 with the SkylakeX and
     # Haswell kernels); 1 % tolerance
-    assert e <= 1.01 * fit_errors(enforced, data)[1] <= 1.01 * 0.0152, e
+    assert e <= 1.01 * fit_errors(enforced, data)[1], e
     assert best[2].order == best[0].n_poles
     assert "refitted to the data under the passivity constraint" in best[2].order_reason
+    # the out-of-band poles are added once: the extended model's step finds them there
+    from vfmodel.fitting.out_of_band_poles import with_out_of_band_poles
+    once = with_out_of_band_poles(enforced, data.freq_hz)
+    assert once.n_poles == enforced.n_poles + 5
+    assert with_out_of_band_poles(once, data.freq_hz).n_poles == once.n_poles
     # a bound already met: nothing to do
     assert _polish_retry(data, first, enforce, 15, "uniform", bound=1.0) is first
     # the clock holds back its share from the retries until released

@@ -493,6 +493,12 @@ def _entry_systems(
     return col, systems, weights
 
 
+def _response_scale(kind: str, h_data: ComplexArray) -> float:
+    """The programs' response scale: 1 for S, else the RMS of the data (1 if zero)."""
+    h0 = 1.0 if kind == "S" else float(np.sqrt(np.mean(np.abs(h_data) ** 2)))
+    return h0 if h0 > 0 else 1.0
+
+
 def _tikhonov(a_ri: FloatArray) -> FloatArray:
     """The programs' Tikhonov rows for the weighted basis ``a_ri``: ``_TIKHONOV`` times
     its largest singular value, times the identity."""
@@ -582,8 +588,7 @@ def enforce(
                 expected=f"{n}x{n}",
             )
         f, h_data = data.freq_hz, data.values
-    h0 = 1.0 if model.kind == "S" else float(np.sqrt(np.mean(np.abs(h_data) ** 2)))
-    h0 = h0 if h0 > 0 else 1.0
+    h0 = _response_scale(model.kind, h_data)
     col, systems, _ = _entry_systems(model, f, h_data, weighting, perturb_d, h0)
     r_blocks = _objective(systems)
 

@@ -26,13 +26,16 @@ _BELOW = (1.0 / 3.0, 0.1)  # added real poles / lowest positive data frequency
 def with_out_of_band_poles(model: RationalModel, f_hz: NDArray[np.float64]) -> RationalModel:
     """``model`` with real poles above and below the data band ``f_hz`` (Hz) added with
     zero residues (the response is unchanged; module docstring). No pole is added below
-    a band that starts at 0 Hz."""
+    a band that starts at 0 Hz, nor one the model already has (an enforced model that got
+    them before: a repeated pole makes the enforcement's basis singular)."""
     pos = f_hz[f_hz > 0]
     if pos.size == 0:
         return model
     above = [-2 * np.pi * pos[-1] * x for x in _ABOVE]
     below = [] if f_hz[0] == 0 else [-2 * np.pi * pos[0] * x for x in _BELOW]
     new = np.asarray(above + below, dtype=complex)
+    new = new[~np.any(np.isclose(new[:, None], model.poles[None], rtol=1e-9, atol=0.0),
+                      axis=1)]
     zeros = np.zeros((new.size, model.n_out, model.n_in), dtype=complex)
     return RationalModel(np.concatenate([model.poles, new]),
                          np.concatenate([model.residues, zeros]), model.dd, model.ee,

@@ -25,7 +25,13 @@ from numpy.typing import NDArray
 
 from vfmodel.core.frequency_data import FrequencyData
 from vfmodel.core.rational_model import RationalModel
-from vfmodel.fitting._enforce import _entry_systems, _response, _tikhonov, _to_residues
+from vfmodel.fitting._enforce import (
+    _entry_systems,
+    _response,
+    _response_scale,
+    _tikhonov,
+    _to_residues,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -42,18 +48,24 @@ def centred_on_data(model: RationalModel, data: FrequencyData, *, weighting: str
     rational = model.without_delay() if model.delay else model
     target = data.values * np.exp(2j * np.pi * f * model.delay)[:, None, None] \
         if model.delay else data.values
-    h0 = 1.0 if model.kind == "S" else float(np.sqrt(np.mean(np.abs(target) ** 2))) or 1.0
+    h0 = _response_scale(model.kind, target)
     col, systems, weights = _entry_systems(rational, f, target, weighting, perturb_d, h0)
     gap = target - _response(rational, f)  # what the change should add, per entry
+    # entries with the same weights share their system: one solve for all of them
+    # (uniform weighting: one for the whole matrix)
+    groups: dict[int, list[int]] = {}
+    for k, a_ri in enumerate(systems):
+        groups.setdefault(id(a_ri), []).append(k)
     x = np.zeros((col.size, n, n))
-    for k, (a_ri, w) in enumerate(zip(systems, weights, strict=True)):
-        i, j = divmod(k, n)
-        y = np.concatenate([gap[:, i, j].real, gap[:, i, j].imag]) * w
-        lhs = np.vstack([a_ri, _tikhonov(a_ri)])
-        rhs = np.concatenate([y, np.zeros(col.size)])
-        x[:, i, j] = np.linalg.lstsq(lhs, rhs, rcond=None)[0] / col
-    dr, dd = _to_residues(rational.poles, x, n)
-    if not perturb_d:
-        dd = np.zeros_like(dd)
+    for ks in groups.values():
+        a_ri = systems[ks[0]]
+        rhs = np.zeros((a_ri.shape[0] + col.size, len(ks)))
+        for m, k in enumerate(ks):
+            g = gap[:, k // n, k % n]
+            rhs[: a_ri.shape[0], m] = np.concatenate([g.real, g.imag]) * weights[k]
+        sol = np.linalg.lstsq(np.vstack([a_ri, _tikhonov(a_ri)]), rhs, rcond=None)[0]
+        for m, k in enumerate(ks):
+            x[:, k // n, k % n] = sol[:, m] / col
+    dr, dd = _to_residues(rational.poles, x, n)  # dd = 0 without perturb_d (no D column)
     return RationalModel(model.poles, model.residues + dr, model.dd + dd, model.ee,
                          model.kind, model.z0, delay=model.delay)

@@ -184,17 +184,17 @@ def run_fit(
             # hfss_18.2 1.02x against 1.26x its bound, mlin 2.9x against 5.9x
             # the default margin only helps the programs (it may be given back); a margin
             # the user asked for is kept at the cut frequencies
+            enforce_weighting: Literal["uniform", "relative"] = \
+                "uniform" if report.weighting == "uniform" else "relative"
             bound_args = partial(enforce_passivity, data=data, margin=margin,
                                  allow_active=True, keep_margin=enforce_margin is not None,
-                                 weighting="uniform" if report.weighting == "uniform"
-                                 else "relative", progress=progress)
+                                 weighting=enforce_weighting, progress=progress)
             # the time limit covers every enforcement of the S models that get retries;
             # the others' single enforcement runs to its end (max_iter programs). A
             # 4-port coupler's first enforcement (64 poles, 2,400-2,900 cuts) ran for
             # more than 14 minutes, its programs growing to 3.5-6 minutes each (measured
             # with another job on the second core)
             clock = _EnforceClock(enforce_time_limit, hold=_POLISH_SHARE if retry else 0.0)
-            weighting = "uniform" if report.weighting == "uniform" else "relative"
 
             def enforce(m: RationalModel, *, max_iter: int
                         ) -> tuple[RationalModel, PassivityReport]:
@@ -226,7 +226,8 @@ def run_fit(
                                           first_iter, bound, clock, fixed=fixed)
             clock.release()
             if retry and first is not None and wanted(first):
-                first = _polish_retry(data, first, enforce, first_iter, weighting, bound)
+                first = _polish_retry(data, first, enforce, first_iter, enforce_weighting,
+                                      bound)
             if first is not None and clock.stopped:
                 note = clock.note(fit_errors(first[0], data)[1], bound)
                 warnings.warn(note, FitWarning, stacklevel=3)
@@ -476,15 +477,9 @@ def _polish_retry(
             break
         model = best[0]
         if extend:  # the real poles out of band it does not have yet
-            wider = with_out_of_band_poles(model, data.freq_hz).poles
-            new = wider[~np.any(np.isclose(wider[:, None], model.poles[None], rtol=1e-9,
-                                           atol=0.0), axis=1)]
-            if not new.size:
+            model = with_out_of_band_poles(model, data.freq_hz)
+            if model.n_poles == best[0].n_poles:
                 continue
-            model = RationalModel(
-                np.concatenate([model.poles, new]),
-                np.concatenate([model.residues, np.zeros((new.size, *model.dd.shape))]),
-                model.dd, model.ee, model.kind, model.z0, delay=model.delay)
         try:
             enforced, check = enforce(centred_on_data(model, data, weighting=weighting),
                                       max_iter=max_iter)
