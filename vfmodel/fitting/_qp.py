@@ -322,11 +322,7 @@ def _feasible(a: sparse.csc_matrix, b: FloatArray, dims: list[int], x: FloatArra
                 return False
             continue
         m = k * (k + 1) // 2
-        c, r = np.tril_indices(k)
-        mat = np.zeros((k, k))
-        vals = s[i:i + m] * np.where(r == c, 1.0, 1.0 / _SQRT2)
-        mat[r, c] = vals
-        mat[c, r] = vals
+        mat = (unsvec(k) @ s[i:i + m]).reshape(k, k, order="F")
         i += m
         if float(np.linalg.eigvalsh(mat)[0]) < -tol:
             return False
