@@ -151,7 +151,6 @@ def solve_qp(
     rinv = _block_inverse(r_blocks, block)
     a_parts: list[sparse.spmatrix] = [sparse.csc_matrix(-(rinv.T @ a.T).T)]
     b_parts: list[FloatArray] = [-np.asarray(b, dtype=float)]
-    cones: list[Any] = [clarabel.NonnegativeConeT(int(a.shape[0]))]
     dims: list[int] = [-int(a.shape[0])]  # per cone: -rows (nonnegative) or k (k x k PSD)
     blocks = list(psd)
     if d_constraint is not None:
@@ -160,15 +159,15 @@ def solve_qp(
             row = sparse.csc_matrix(([-1.0 / d_constraint.col], ([0], [j])), shape=(1, n_var))
             a_parts.append(row)
             b_parts.append(np.array([float(d_constraint.d0[0, 0]) - d_constraint.bound]))
-            cones.append(clarabel.NonnegativeConeT(1))
             dims.append(-1)
         else:
             blocks.insert(0, _psd_rows(d_constraint, n_var))
     for blk in blocks:
         a_parts.append(blk.a)
         b_parts.append(blk.b)
-        cones.append(clarabel.PSDTriangleConeT(blk.k))
         dims.append(blk.k)
+    cones: list[Any] = [clarabel.NonnegativeConeT(-k) if k < 0 else
+                        clarabel.PSDTriangleConeT(k) for k in dims]
     a_parts[1:] = [sparse.csc_matrix(part @ rinv) for part in a_parts[1:]]
     a_all = sparse.vstack(a_parts, format="csr")
     b_all = np.concatenate(b_parts)
