@@ -74,6 +74,24 @@ def test_limit_covers_the_first_enforcement() -> None:
         assert cut.passivity is not None and cut.passivity.iterations == 1
 
 
+@pytest.mark.filterwarnings("ignore::vfmodel.errors.FitWarning")  # beyond 1.2x: no retries
+def test_limit_covers_models_without_retries(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # models that get no retries (S of more than _RETRY_PORTS ports; Z, Y) had no limit:
+    # an 8-port model of coupled lines ran 30 programs past 16 minutes. With no retries
+    # for any port count, a limit already past stops the first enforcement after its first
+    # program: certified by it (1 program) or the time-limit error; the old code ran every
+    # program (the full enforcement takes more than one, asserted first)
+    monkeypatch.setattr(fit_job, "_RETRY_PORTS", 0)
+    full = run_fit(DELAY_SHORT, passive=True, delay="auto")
+    assert full.passivity is not None and full.passivity.iterations > 1
+    try:
+        cut = run_fit(DELAY_SHORT, passive=True, delay="auto", enforce_time_limit=1e-9)
+    except InputError as err:
+        assert "within the time limit" in str(err) and "--enforce-time-limit" in str(err)
+    else:
+        assert cut.passivity is not None and cut.passivity.iterations == 1
+
+
 def test_enforce_passivity_time_limit() -> None:
     model = vector_fit(DELAY_SHORT, delay="auto")[0]
     full = enforce_passivity(model, DELAY_SHORT)[1]

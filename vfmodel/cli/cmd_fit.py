@@ -82,8 +82,8 @@ def _order(value: str) -> int | str:
               "the final model may give it back].")
 @click.option("--enforce-time-limit", type=click.FloatRange(min=0), default=ENFORCE_TIME_LIMIT,
               show_default=True, help="Seconds from the start of passivity enforcement "
-              "after which the running convex program stops and no further one starts (S "
-              "data of at most 4 ports: the first enforcement and its retries for an "
+              "after which the running convex program stops and no further one starts (the "
+              "first enforcement and, for S data of at most 4 ports, its retries for an "
               "enforced error within 1.2x of max(fit error, data floor)); no certified "
               "model by then exits 2; 0: no limit.")
 @click.option("--spice", "spice", type=click.Path(dir_okay=False, path_type=Path),

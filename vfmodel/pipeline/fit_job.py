@@ -124,9 +124,9 @@ def run_fit(
     ``enforce_margin`` None: 1e-6, or a tenth of max(fit error, data floor) when that is
     smaller, at least 1e-10 (:func:`enforce_margin_for`). ``enforce_time_limit``: seconds
     from the start of passivity enforcement after which the running convex program stops
-    and no further one starts (S models of at most 4 ports, which get retries; None or 0:
-    no limit); a model kept because of it carries a note saying so, and no certified model
-    by then is an :class:`InputError` naming the option.
+    and no further one starts (the first enforcement and, for S models of at most 4 ports,
+    its retries; None or 0: no limit); a model kept because of it carries a note saying so,
+    and no certified model by then is an :class:`InputError` naming the option.
     """
     if enforce_time_limit is not None and not enforce_time_limit >= 0:  # NaN too
         raise InputError("enforce_time_limit must be a number of seconds >= 0 (0: no limit)",
@@ -189,17 +189,18 @@ def run_fit(
             bound_args = partial(enforce_passivity, data=data, margin=margin,
                                  allow_active=True, keep_margin=enforce_margin is not None,
                                  weighting=enforce_weighting, progress=progress)
-            # the time limit covers every enforcement of the S models that get retries;
-            # the others' single enforcement runs to its end (max_iter programs). A
-            # 4-port coupler's first enforcement (64 poles, 2,400-2,900 cuts) ran for
-            # more than 14 minutes, its programs growing to 3.5-6 minutes each (measured
-            # with another job on the second core)
+            # the time limit covers every enforcement: the first one and, for S models of
+            # at most _RETRY_PORTS ports, its retries. A 4-port coupler's first
+            # enforcement (64 poles, 2,400-2,900 cuts) ran for more than 14 minutes, its
+            # programs growing to 3.5-6 minutes each (measured with another job on the
+            # second core); an 8-port model of four coupled lines (42 poles, 700 points,
+            # no retries: session 43's unseen set) was at its 15th of 30 programs after
+            # 16 minutes, at 1.8 GB, before the limit covered models without retries
             clock = _EnforceClock(enforce_time_limit, hold=_POLISH_SHARE if retry else 0.0)
 
             def enforce(m: RationalModel, *, max_iter: int
                         ) -> tuple[RationalModel, PassivityReport]:
-                return bound_args(m, max_iter=max_iter,
-                                  time_limit=clock.remaining() if retry else None)
+                return bound_args(m, max_iter=max_iter, time_limit=clock.remaining())
             try:
                 enforced, pas_e = enforce(model, max_iter=first_iter)
                 first = (enforced, pas_e, report)
@@ -232,7 +233,7 @@ def run_fit(
                 note = clock.note(fit_errors(first[0], data)[1], bound)
                 warnings.warn(note, FitWarning, stacklevel=3)
                 first = (first[0], first[1], replace(first[2], notes=(*first[2].notes, note)))
-            if first is None and clock.stopped:
+            if first is None and (clock.stopped or clock.out()):
                 raise InputError(
                     f"no certified passive model within the time limit of {clock.limit:g} "
                     f"s: {failure}",
