@@ -308,6 +308,38 @@ def test_delay_extraction_cuts_the_order() -> None:
     assert check.passive and model.delay == pytest.approx(tau, rel=0.05)
 
 
+def test_far_note_reads_the_data_the_delayed_fit_saw(monkeypatch: pytest.MonkeyPatch
+                                                    ) -> None:
+    # the note on a fit far above its noise floor explains the error by the sampling and
+    # the phase turns of the data the rational part fitted: with the delay taken out, the
+    # delayed line's 25 turns (analytic: 5 ns over 5 GHz) are gone. A PIN-diode cell
+    # fitted with its 13.6 ns delay out was told "the phase turns 137 times".
+    from dataclasses import replace
+
+    from vfmodel.fitting import _fit_report, vectfit
+    from vfmodel.fitting._fit_setup import _phase_turns
+
+    seen: list[tuple[FrequencyData, float]] = []
+    real = vectfit._far_from_floor
+
+    def spy(report, fd, **kw):  # type: ignore[no-untyped-def]
+        seen.append((fd, kw["delay"]))
+        return real(report, fd, **kw)
+
+    monkeypatch.setattr(vectfit, "_far_from_floor", spy)
+    f = np.linspace(1e7, 5e9, 600)
+    data = FrequencyData(f, _delayed_line(f, 5e-9), kind="S")
+    model, report = vector_fit(data, delay=5e-9)
+    ((fitted, delay),) = seen
+    assert delay == model.delay == 5e-9
+    assert _phase_turns(data) > 24 and _phase_turns(fitted) < 1
+    # the note itself, for a report far above its floor: no phase turns to blame, the
+    # delay named
+    far = replace(report, weighted_rel_rms_error=0.5, noise_floor=1e-4)
+    (note,) = _fit_report._far_from_floor(far, fitted, limit=200, delay=5e-9).notes
+    assert "phase turns" not in note and "delay of 5e-09 s taken out" in note, note
+
+
 def test_delay_estimate_follows_the_transmission() -> None:
     # a 2-port whose reflections carry more energy than the transmission (a filter's
     # stopband): the common delay is the transmission's (the reflection has none)

@@ -190,10 +190,15 @@ def _constant_fit(fd: FrequencyData, wname: str) -> tuple[RationalModel, FitRepo
 
 
 def _far_from_floor(
-    report: FitReport, fd: FrequencyData, limit: int, hit_max: bool = False
+    report: FitReport, fd: FrequencyData, limit: int, hit_max: bool = False,
+    delay: float = 0.0,
 ) -> FitReport:
     """Add a note when the automatic order stopped far above the noise floor (or without
-    one: ``noise_floor`` None), saying why."""
+    one: ``noise_floor`` None), saying why. ``fd``: the data the rational part fitted,
+    i.e. advanced by the common ``delay`` (s) when one was taken out: the sampling and the
+    phase turns that explain the error are theirs (a PIN-diode waveguide cell, 137 turns,
+    was fitted with its 13.6 ns delay taken out and still told the user that the phase
+    turned 137 times, "which costs about two poles per turn")."""
     floor = report.noise_floor or 0.0
     err = report.weighted_rel_rms_error
     if err <= _FAR * max(floor, 1e-9) or err < 1e-3:
@@ -209,9 +214,10 @@ def _far_from_floor(
             "finer frequency step)"
         )
     turns = _phase_turns(fd)
+    taken = f" with the common delay of {delay:.3g} s taken out" if delay > 0 else ""
     if turns > _DELAY_TURNS:
         why.append(
-            f"the phase turns {turns:.0f} times over the band (a delay of about "
+            f"the phase turns {turns:.0f} times over the band{taken} (a delay of about "
             f"{turns / max(fd.freq_hz[-1] - fd.freq_hz[0], 1e-300):.3g} s), which costs "
             "about two poles per turn"
         )
@@ -220,7 +226,9 @@ def _far_from_floor(
                    f"{limit} poles for {fd.n_freq} samples)" if limit < 200 else
                    f"the order limit {limit} was reached (raise max_order)")
     if not why:
-        why.append("adding poles stopped improving the fit (noisy or non-rational data)")
+        why.append("adding poles stopped improving the fit (noisy or non-rational data"
+                   + (f"; fitted{taken}, whatever of the response a single delay does "
+                      "not explain, e.g. multiple reflections" if delay > 0 else "") + ")")
     if report.noise_floor is None:
         head = (f"the fit error {err:.3g} at order {report.order} is large and the data's "
                 "noise floor could not be estimated (adjacent samples differ as much as "

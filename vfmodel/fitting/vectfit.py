@@ -333,6 +333,7 @@ def vector_fit(
             history, n_it = (*history, *last.history), n_it + last.n_iterations
         reason, noise = f"order {n} given", None
     model = _to_model(coef, fd, omega_scale, fit_d=bool(fit_d), fit_e=bool(fit_e))
+    fitted = fd  # the data the rational part fitted (advanced by the delay, if any)
     if tau > 0:
         fd, model = data_fd, RationalModel(model.poles, model.residues, model.d, model.e,
                                            model.kind, model.z0, delay=tau)
@@ -340,7 +341,7 @@ def vector_fit(
         model, fd, prob, coef, n_it, converged, reason, noise, history, wname
     )
     if order == "auto":
-        report = _far_from_floor(report, fd, limit=cap, hit_max=hit_max)
+        report = _far_from_floor(report, fitted, limit=cap, hit_max=hit_max, delay=tau)
     for note in report.notes:
         warnings.warn(note, FitWarning, stacklevel=3)
     if not converged:
