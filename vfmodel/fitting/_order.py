@@ -163,7 +163,7 @@ def estimate_noise(prob: core.Problem) -> float:
 def _noise_estimates(prob: core.Problem) -> tuple[float, float]:
     """The estimate of the responses as they are (what tells whether the data are
     sampled finely enough to estimate any noise, :data:`NOISE_UNRESOLVED`) and
-    :func:`estimate_noise`'s (the smaller one with the delays taken out)."""
+    :func:`estimate_noise`'s (the one with the delays taken out where that is kept)."""
     wh = prob.wh
     raw = _noise_of(wh)
     if wh.shape[0] < 3:

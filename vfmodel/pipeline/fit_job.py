@@ -194,8 +194,9 @@ def run_fit(
             # enforcement (64 poles, 2,400-2,900 cuts) ran for more than 14 minutes, its
             # programs growing to 3.5-6 minutes each (measured with another job on the
             # second core); an 8-port model of four coupled lines (42 poles, 700 points,
-            # no retries: session 43's unseen set) was at its 15th of 30 programs after
-            # 16 minutes, at 1.8 GB, before the limit covered models without retries
+            # no retries: session 43's unseen set) was at its 16th of 30 programs after
+            # 16 minutes, at 1.9-2.05 GB (two runs), before the limit covered models
+            # without retries
             clock = _EnforceClock(enforce_time_limit, hold=_POLISH_SHARE if retry else 0.0)
 
             def enforce(m: RationalModel, *, max_iter: int
