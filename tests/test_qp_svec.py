@@ -22,7 +22,6 @@ def test_unsvec_inverts_svec(k: int) -> None:
     np.testing.assert_allclose(back, m, rtol=0, atol=1e-12)
 
 
-
 @pytest.mark.parametrize(("shift", "ok"), [(0.0, True), (-2e-9, True), (-2e-8, False)])
 def test_feasible_reads_the_cones_of_a_primal_program(shift: float, ok: bool) -> None:
     """``_feasible`` (the check that keeps a feasible "AlmostSolved" point) on constraints

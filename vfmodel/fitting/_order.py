@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from vfmodel.fitting import _relocate
 from vfmodel.fitting import _vf_core as core
+from vfmodel.fitting._fit_setup import _DELAY_TURNS
 
 NOISE_MARGIN = 1.1  # stop when the weighted error is within this factor of the noise floor
 # at a plateau (adding poles stopped paying above the noise) or the maximum order: the
@@ -90,12 +91,13 @@ _FAILED_STEP = 2.0  # a growth step fitting this much worse than the best is ret
 # tiered-calibration ro and probe files) 0.77-2.25, and stopped at 2-20 poles "within the
 # noise floor" with errors of 83-99 %.
 NOISE_UNRESOLVED = 0.25
-_TURNS = 5.0  # phase turns of a response over the band from which its delay is taken out
-# for the noise estimate (estimate_noise; as vectfit's delay="auto", _fit_setup._DELAY_TURNS)
-# ... and kept when it is below the estimate of the data as they are by this factor: on
+# estimate_noise takes each response's delay out where one turns more than
+# _fit_setup._DELAY_TURNS times (the turns from which delay="auto" tries a delay), and keeps
+# that estimate when it is below the estimate of the data as they are by this factor: on
 # noise alone the two differ by the estimator's scatter (3-5 % on the noisy skin-effect
-# lines of tests/test_vectfit_auto.py, where the smaller of the two stopped the order a few
-# per cent early and left the fit unconverged), on a coarsely sampled delay by its signal
+# lines of tests/test_vectfit_auto.py, where always taking the smaller let the growth run
+# on past the first estimate's stop and left the fit unconverged), on a coarsely sampled
+# delay by its signal
 _SIGNAL = 1.5
 # ... and when it measures noise at all: noise-free simulations keep the estimate of the
 # data as they are. A simulated delayed line (tests/test_fit_robust.py, 25 turns) gives
@@ -147,7 +149,8 @@ def estimate_noise(prob: core.Problem) -> float:
 
     A response whose phase turns many times over the band (a long delay) is sampled at a
     fraction of a turn per point, and its high-order differences are the signal's, not the
-    noise's. Where some response turns more than :data:`_TURNS` times, the estimate is
+    noise's. Where some response turns more than
+    :data:`~vfmodel.fitting._fit_setup._DELAY_TURNS` times, the estimate is
     also made with each response's linear phase (least-squares delay) taken out, and kept
     when it is below the first by more than :data:`_SIGNAL`: multiplying by a phase ramp
     of unit modulus leaves the noise's power as it is, so either estimate only errs high,
@@ -169,7 +172,7 @@ def _noise_estimates(prob: core.Problem) -> tuple[float, float]:
     if wh.shape[0] < 3:
         return raw, raw
     ph = np.unwrap(np.angle(wh), axis=0)  # (K, M)
-    if not np.any(np.abs(ph[-1] - ph[0]) > 2 * np.pi * _TURNS):
+    if not np.any(np.abs(ph[-1] - ph[0]) > 2 * np.pi * _DELAY_TURNS):
         return raw, raw
     # each response's least-squares phase slope (its delay, in the problem's units)
     omega = prob.s.imag
