@@ -54,3 +54,28 @@ def test_every_program_failing_is_exit_2(tmp_path: Path, capsys: Any,
     assert "found no certificate" in res.err and "status 'optimal'" in res.err
     assert "Traceback" not in res.err
     assert not (out / "model.json").exists()
+
+
+def test_failure_says_where_the_fit_violates(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The message of a failed enforcement describes the unconstrained model's violation
+    and places its worst frequency against the data's band. Reference: the model of the
+    same fit (vector_fit, same options) checked by check_passivity."""
+    from vfmodel.errors import InputError
+    from vfmodel.fitting import check_passivity, vector_fit
+
+    def fails(*args: Any, **kw: Any) -> Any:
+        raise SolverError("passivity program did not end with status 'optimal'")
+
+    monkeypatch.setattr(fit_job, "enforce_passivity", fails)
+    model, _ = vector_fit(DELAY_SHORT, delay="auto")
+    ref = check_passivity(model)
+    assert not ref.passive and ref.worst_freq_hz is not None
+    net = skrf.Network(str(DELAY_SHORT))
+    lo, hi = float(net.f[0]), float(net.f[-1])
+    place = "above" if ref.worst_freq_hz > hi else "below" if ref.worst_freq_hz < lo \
+        else "inside"
+    with pytest.raises(InputError) as err:
+        run_fit(DELAY_SHORT, passive=True, delay="auto")
+    text = str(err.value)
+    assert f"before enforcement the fitted model is {ref.describe()}" in text, text
+    assert f"its worst violation {place} the data's band ({lo:.4g}-{hi:.4g} Hz)" in text
